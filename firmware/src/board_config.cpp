@@ -1,0 +1,151 @@
+#include "board_config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+
+namespace endotower::firmware {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Reader {
+    const std::string& file;
+    std::string& error;
+
+    bool fail(const YAML::Node& n, const std::string& field, const std::string& what) {
+        const int line = n.Mark().line >= 0 ? n.Mark().line + 1 : 0;
+        error = file + ":" + std::to_string(line) + ": field '" + field + "': " + what;
+        return false;
+    }
+
+    // Only the listed keys are allowed in a mapping.
+    bool keys(const YAML::Node& map, const std::string& prefix, std::initializer_list<const char*> allowed) {
+        if (!map.IsMap()) return fail(map, prefix, "expected a mapping of keys");
+        for (const auto& kv : map) {
+            const std::string k = kv.first.as<std::string>();
+            bool ok = false;
+            for (const char* a : allowed) ok = ok || k == a;
+            if (!ok) {
+                std::string list;
+                for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+                return fail(kv.first, prefix.empty() ? k : prefix + "." + k,
+                            "unknown key (expected one of: " + list + ")");
+            }
+        }
+        return true;
+    }
+
+    bool text(const YAML::Node& map, const char* key, const std::string& field, std::string& out) {
+        const YAML::Node n = map[key];
+        if (!n) return true;
+        if (!n.IsScalar()) return fail(n, field, "expected a string");
+        out = n.Scalar();
+        return true;
+    }
+
+    bool number(const YAML::Node& map, const char* key, const std::string& field, double lo,
+                double hi, double& out) {
+        const YAML::Node n = map[key];
+        if (!n) return true;
+        double v = 0;
+        std::istringstream s(n.IsScalar() ? n.Scalar() : std::string());
+        s.imbue(std::locale::classic());
+        if (!n.IsScalar() || !(s >> v) || !(s >> std::ws).eof())
+            return fail(n, field, "expected a number, got '" + (n.IsScalar() ? n.Scalar() : "?") + "'");
+        if (v < lo || v > hi) {
+            std::ostringstream m;
+            m << "must be between " << lo << " and " << hi << ", got " << n.Scalar();
+            return fail(n, field, m.str());
+        }
+        out = v;
+        return true;
+    }
+
+    bool integer(const YAML::Node& map, const char* key, const std::string& field, int lo, int hi,
+                 int& out) {
+        double v = out;
+        if (!number(map, key, field, lo, hi, v)) return false;
+        if (map[key] && v != static_cast<int>(v)) return fail(map[key], field, "expected an integer");
+        out = static_cast<int>(v);
+        return true;
+    }
+
+    bool boolean(const YAML::Node& map, const char* key, const std::string& field, bool& out) {
+        const YAML::Node n = map[key];
+        if (!n) return true;
+        if (!n.IsScalar() || !YAML::convert<bool>::decode(n, out))
+            return fail(n, field, "expected true or false, got '" + (n.IsScalar() ? n.Scalar() : "?") + "'");
+        return true;
+    }
+};
+
+std::string resolve(const fs::path& base, const std::string& p) {
+    if (p.empty() || fs::path(p).is_absolute()) return p;
+    return (base / p).lexically_normal().string();
+}
+
+}  // namespace
+
+bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
+    std::ifstream in(path);
+    if (!in) {
+        error = "board file not found or unreadable: " + path;
+        return false;
+    }
+    YAML::Node root;
+    try {
+        root = YAML::Load(in);
+    } catch (const YAML::ParserException& e) {
+        error = path + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg;
+        return false;
+    }
+    Reader r{path, error};
+    BoardConfig c;
+    c.path = path;
+    if (!root || root.IsNull()) {
+        error = path + ": board file is empty";
+        return false;
+    }
+    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim"})) return false;
+    if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
+    if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
+        return false;
+    if (const YAML::Node v = root["video"]) {
+        if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms"}) ||
+            !r.number(v, "latency_ms", "video.latency_ms", 0, 1000, c.latency_ms) ||
+            !r.number(v, "compose_budget_ms", "video.compose_budget_ms", 0, 1000, c.compose_budget_ms))
+            return false;
+    }
+    if (const YAML::Node a = root["analysis"]) {
+        if (!r.keys(a, "analysis", {"stage", "timeout_ms", "virtual_cost_ms", "max_overlay_age"}) ||
+            !r.text(a, "stage", "analysis.stage", c.stage) ||
+            !r.number(a, "timeout_ms", "analysis.timeout_ms", 0, 60000, c.analysis_timeout_ms) ||
+            !r.number(a, "virtual_cost_ms", "analysis.virtual_cost_ms", 0, 60000, c.analysis_virtual_cost_ms) ||
+            !r.integer(a, "max_overlay_age", "analysis.max_overlay_age", 0, 1000, c.max_overlay_age))
+            return false;
+        if (c.stage != "status_badge" && c.stage != "none")
+            return r.fail(a["stage"], "analysis.stage",
+                          "unknown stage '" + c.stage + "' (expected status_badge or none)");
+    }
+    if (const YAML::Node s = root["sim"]) {
+        if (!r.keys(s, "sim", {"input", "events", "output", "frames", "trace", "realtime", "fps"}) ||
+            !r.text(s, "input", "sim.input", c.sim_input) || !r.text(s, "events", "sim.events", c.sim_events) ||
+            !r.text(s, "output", "sim.output", c.sim_output) || !r.text(s, "frames", "sim.frames", c.sim_frames) ||
+            !r.text(s, "trace", "sim.trace", c.sim_trace) ||
+            !r.boolean(s, "realtime", "sim.realtime", c.sim_realtime) ||
+            !r.number(s, "fps", "sim.fps", 0, 1000, c.sim_fps))
+            return false;
+    }
+    const fs::path base = fs::path(path).parent_path();
+    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace})
+        *p = resolve(base, *p);
+    out = std::move(c);
+    return true;
+}
+
+}  // namespace endotower::firmware

@@ -1,0 +1,34 @@
+// BoardConfig: one board's description (board/NAME/board.yaml), parsed with yaml-cpp.
+// Relative paths are resolved against the board file's directory. Unknown keys are
+// errors (a typo must not silently fall back to a default). Every error names the
+// file, line and field.
+#pragma once
+
+#include <string>
+
+namespace endotower::firmware {
+
+struct BoardConfig {
+    std::string path;  // the board file itself
+    std::string name;
+    std::string description;
+
+    // video
+    double latency_ms = 0.0;  // 0 = one frame period
+    double compose_budget_ms = 0.0;
+
+    // analysis
+    std::string stage = "status_badge";  // "status_badge" | "none"
+    double analysis_timeout_ms = 0.0;
+    double analysis_virtual_cost_ms = 0.0;
+    int max_overlay_age = 0;
+
+    // sim
+    std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;
+    bool sim_realtime = false;
+    double sim_fps = 0.0;  // 0 = the recording's own rate
+};
+
+bool load_board(const std::string& path, BoardConfig& out, std::string& error);
+
+}  // namespace endotower::firmware

@@ -1,0 +1,263 @@
+// End-to-end: the `endotower sim` command on recordings, checked frame by frame.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <sys/wait.h>
+
+#include "endotower/app/trace_reader.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+    int status = -1;
+    std::string output;  // stdout and stderr
+};
+
+Run run(const std::string& args) {
+    const std::string cmd = std::string(ENDOTOWER_BINARY) + " " + args + " 2>&1";
+    Run r;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (p == nullptr) return r;
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
+    const int st = pclose(p);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
+}
+
+fs::path fresh_dir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("endotower_replay_" + name);
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+// Numbered PNG frames with distinct, textured content (a gradient that moves).
+void write_frames(const fs::path& dir, int n, int w, int h) {
+    for (int i = 0; i < n; ++i) {
+        cv::Mat m(h, w, CV_8UC3);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                m.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(x + i), static_cast<uchar>(y * 2 + i),
+                                                  static_cast<uchar>((x ^ y) + 3 * i));
+        cv::imwrite((dir / (std::to_string(i) + ".png")).string(), m);
+    }
+}
+
+// Bounding box of the pixels that differ (empty if none).
+cv::Rect diff_box(const cv::Mat& a, const cv::Mat& b) {
+    int x0 = a.cols, y0 = a.rows, x1 = -1, y1 = -1;
+    for (int y = 0; y < a.rows; ++y)
+        for (int x = 0; x < a.cols; ++x)
+            if (a.at<cv::Vec3b>(y, x) != b.at<cv::Vec3b>(y, x)) {
+                x0 = std::min(x0, x), y0 = std::min(y0, y);
+                x1 = std::max(x1, x), y1 = std::max(y1, y);
+            }
+    return x1 < 0 ? cv::Rect() : cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+}
+
+std::vector<endotower::app::TraceRecord> load(const fs::path& p) {
+    std::vector<endotower::app::TraceRecord> recs;
+    std::string err;
+    EXPECT_TRUE(endotower::app::read_trace(p.string(), recs, err)) << err;
+    return recs;
+}
+
+const std::string kBoard = std::string("--board ") + ENDOTOWER_SOURCE_DIR + "/board/sim/board.yaml ";
+
+TEST(Replay, EveryFrameOutInOrderWithTheConfiguredLatencyAndExactPassthrough) {
+    const fs::path d = fresh_dir("order");
+    write_frames(d / "in", 40, 320, 240);
+    const Run r = run(kBoard + "--input " + (d / "in").string() + " --frames " + (d / "out").string() +
+                      " --trace " + (d / "trace.jsonl").string() + " --latency-ms 50 --out ''");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const auto recs = load(d / "trace.jsonl");
+    ASSERT_EQ(recs.size(), 40u);
+    for (int i = 0; i < 40; ++i) {
+        const auto& t = recs[static_cast<std::size_t>(i)];
+        EXPECT_EQ(t.frame, i);
+        EXPECT_EQ(t.seq, i);
+        EXPECT_EQ(t.latency_ns, 50'000'000) << i;
+        EXPECT_EQ(t.present_ns - t.capture_ns, 50'000'000) << i;
+        EXPECT_FALSE(t.late);
+        if (i > 0) EXPECT_EQ(t.capture_ns - recs[static_cast<std::size_t>(i - 1)].capture_ns, 40'000'000);
+        // Output frame i is input frame i, bit for bit, outside the corner badge.
+        const cv::Mat in = cv::imread((d / "in" / (std::to_string(i) + ".png")).string());
+        char name[32];
+        std::snprintf(name, sizeof name, "%06d.png", i);
+        const cv::Mat out = cv::imread((d / "out" / name).string());
+        ASSERT_EQ(out.size(), in.size()) << name;
+        const cv::Rect changed = diff_box(in, out);
+        // Only the badge in the top-left corner may differ.
+        EXPECT_LE(changed.x + changed.width, in.cols / 2) << name;
+        EXPECT_LE(changed.y + changed.height, in.rows / 4) << name;
+    }
+}
+
+TEST(Replay, WithoutAnalysisTheOutputIsTheInputBitForBit) {
+    const fs::path d = fresh_dir("exact");
+    write_frames(d / "in", 10, 160, 120);
+    std::ofstream(d / "board.yaml") << "board: t\nanalysis: {stage: none}\n";
+    const Run r = run("--board " + (d / "board.yaml").string() + " --input " + (d / "in").string() +
+                      " --frames " + (d / "out").string() + " --out " + (d / "out.mkv").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    cv::VideoCapture cap((d / "out.mkv").string());
+    for (int i = 0; i < 10; ++i) {
+        const cv::Mat in = cv::imread((d / "in" / (std::to_string(i) + ".png")).string());
+        char name[32];
+        std::snprintf(name, sizeof name, "%06d.png", i);
+        const cv::Mat out = cv::imread((d / "out" / name).string());
+        EXPECT_EQ(cv::norm(in, out, cv::NORM_INF), 0.0) << name;
+        cv::Mat video;
+        ASSERT_TRUE(cap.read(video)) << "video frame " << i;
+        EXPECT_EQ(cv::norm(in, video, cv::NORM_INF), 0.0) << "FFV1 is lossless, frame " << i;
+    }
+}
+
+TEST(Replay, DeterministicReplayIsIdenticalRunToRun) {
+    const fs::path d = fresh_dir("determinism");
+    std::string traces[2];
+    for (int k = 0; k < 2; ++k) {
+        const fs::path o = d / std::to_string(k);
+        const Run r = run(kBoard + "--frames " + o.string() + " --trace " + (o / "t.jsonl").string() +
+                          " --out ''");
+        ASSERT_EQ(r.status, 0) << r.output;
+        // Wall-clock stage timings are measurements; everything else must match.
+        for (auto& t : load(o / "t.jsonl"))
+            traces[k] += std::to_string(t.frame) + " " + std::to_string(t.capture_ns) + " " +
+                         std::to_string(t.present_ns) + " " + std::to_string(t.analysis_age.value_or(-1)) +
+                         " " + std::to_string(t.input.size()) + " " + t.extra + "\n";
+    }
+    EXPECT_EQ(traces[0], traces[1]);
+    int frames = 0;
+    for (const auto& e : fs::directory_iterator(d / "0")) {
+        if (e.path().extension() != ".png") continue;
+        ++frames;
+        std::ifstream a(e.path(), std::ios::binary), b(d / "1" / e.path().filename(), std::ios::binary);
+        const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+        ASSERT_EQ(sa, sb) << e.path().filename();
+    }
+    EXPECT_EQ(frames, 180);
+}
+
+TEST(Replay, BundledRecordingWithTimeline) {
+    const fs::path d = fresh_dir("bundled");
+    const Run r = run(kBoard + "--out " + (d / "out.mkv").string() + " --trace " + (d / "t.jsonl").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("180 frames in, 180 out, 0 late"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("target 33.333 ms; min 33.333, median 33.333, p99 33.333, max 33.333 ms"),
+              std::string::npos)
+        << r.output;
+    const auto recs = load(d / "t.jsonl");
+    ASSERT_EQ(recs.size(), 180u);
+    // board/sim/events.txt: press at frame 30, release at 45, wheel at t=2.0 s (frame 60).
+    ASSERT_EQ(recs[30].input.size(), 1u);
+    EXPECT_EQ(recs[30].input[0].kind, "press");
+    ASSERT_EQ(recs[45].input.size(), 1u);
+    EXPECT_EQ(recs[45].input[0].kind, "release");
+    ASSERT_EQ(recs[60].input.size(), 1u);
+    EXPECT_EQ(recs[60].input[0].delta, 1);
+    EXPECT_NE(recs[40].extra.find("\"button_down\":true"), std::string::npos) << recs[40].extra;
+    EXPECT_NE(recs[50].extra.find("\"button_down\":false"), std::string::npos) << recs[50].extra;
+    cv::VideoCapture cap((d / "out.mkv").string());
+    ASSERT_TRUE(cap.isOpened());
+    EXPECT_EQ(static_cast<int>(cap.get(cv::CAP_PROP_FRAME_WIDTH)), 640);
+    int n = 0;
+    cv::Mat m;
+    while (cap.read(m)) ++n;
+    EXPECT_EQ(n, 180);
+    EXPECT_FALSE(fs::exists(d / "t.jsonl.tmp"));
+}
+
+TEST(Replay, TruncatedRecordingStillYieldsValidOutputs) {
+    const fs::path d = fresh_dir("truncated");
+    {
+        cv::VideoWriter w((d / "in.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, {320, 240});
+        ASSERT_TRUE(w.isOpened());
+        for (int i = 0; i < 60; ++i) w.write(cv::Mat(240, 320, CV_8UC3, cv::Scalar(i * 4, 100, 200 - i * 3)));
+    }
+    fs::resize_file(d / "in.avi", fs::file_size(d / "in.avi") / 2);
+    const Run r = run(kBoard + "--input " + (d / "in.avi").string() + " --out " + (d / "out.mkv").string() +
+                      " --trace " + (d / "t.jsonl").string() + " --events ''");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const auto recs = load(d / "t.jsonl");
+    EXPECT_GT(recs.size(), 10u);
+    EXPECT_LT(recs.size(), 60u);
+    cv::VideoCapture cap((d / "out.mkv").string());
+    int n = 0;
+    cv::Mat m;
+    while (cap.read(m)) ++n;
+    EXPECT_EQ(static_cast<std::size_t>(n), recs.size());
+}
+
+TEST(Replay, RealLaparoscopicClip) {
+    const fs::path frames = fs::path(ENDOTOWER_SHARED_DATA) / "sznitman_lap" / "frames";
+    if (!fs::is_directory(frames)) GTEST_SKIP() << "skipped: " << frames << " is absent";
+    const fs::path d = fresh_dir("sznitman");
+    const Run r = run(kBoard + "--input " + frames.string() + " --out '' --frames " + (d / "out").string() +
+                      " --trace " + (d / "t.jsonl").string() + " --events ''");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const auto recs = load(d / "t.jsonl");
+    ASSERT_EQ(recs.size(), 400u);
+    for (std::size_t i = 0; i < recs.size(); ++i) {
+        EXPECT_EQ(recs[i].frame, static_cast<std::int64_t>(i));
+        EXPECT_EQ(recs[i].latency_ns, 40'000'000);  // one period at 25 fps
+    }
+    // Frame 001175.png is the first: output 000000.png shows it outside the badge.
+    const cv::Mat in = cv::imread((frames / "001175.png").string());
+    const cv::Mat out = cv::imread((d / "out" / "000000.png").string());
+    const cv::Rect lower(0, in.rows / 4, in.cols, in.rows - in.rows / 4);
+    EXPECT_EQ(cv::norm(in(lower), out(lower), cv::NORM_INF), 0.0);
+}
+
+TEST(Cli, HelpAndVersion) {
+    Run r = run("--help");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.output.find("sim"), std::string::npos);
+    r = run("--version");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_EQ(r.output.rfind("endotower ", 0), 0u) << r.output;
+    r = run("sim --help");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.output.find("--realtime"), std::string::npos);
+}
+
+struct BadInput {
+    std::string args;
+    std::string message;
+};
+
+TEST(Cli, BadInputIsNamedWithExitCode2) {
+    const fs::path d = fresh_dir("cli");
+    fs::create_directories(d / "empty");
+    std::ofstream(d / "notavideo.mp4") << "this is text, not a video\n";
+    std::ofstream(d / "events.txt") << "frame 1 press\nframe 2 presss\n";
+    std::ofstream(d / "board.yaml") << "board: x\nvideo:\n  latency_ms: soon\n";
+    const std::string out = " --out " + (d / "o.mkv").string();
+    const BadInput cases[] = {
+        {"sim --input /no/such/clip.mp4" + out, "recording not found: /no/such/clip.mp4"},
+        {"sim --input " + (d / "empty").string() + out, "no images"},
+        {"sim --input " + (d / "notavideo.mp4").string() + out, "cannot decode video"},
+        {"sim --events " + (d / "events.txt").string() + out, (d / "events.txt").string() + ":2:"},
+        {"sim --board " + (d / "board.yaml").string(), (d / "board.yaml").string() + ":3: field 'video.latency_ms'"},
+        {"sim --bogus", "unknown option '--bogus'"},
+        {"sim --latency-ms x", "--latency-ms needs a number"},
+        {"launch", "unknown command 'launch'"},
+    };
+    for (const auto& c : cases) {
+        const Run r = run(c.args);
+        EXPECT_EQ(r.status, 2) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
+    }
+    EXPECT_FALSE(fs::exists(d / "o.mkv"));
+}
+
+}  // namespace

@@ -1,0 +1,91 @@
+// Board file parsing: values, defaults, path resolution, and errors naming the line
+// and field.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "board_config.hpp"
+
+namespace endotower::firmware {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string write_board(const std::string& name, const std::string& text) {
+    const fs::path dir = fs::temp_directory_path() / "endotower_board_test";
+    fs::create_directories(dir);
+    const fs::path p = dir / name;
+    std::ofstream(p) << text;
+    return p.string();
+}
+
+TEST(Board, TheShippedSimBoardLoads) {
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(ENDOTOWER_SOURCE_DIR "/board/sim/board.yaml", b, err)) << err;
+    EXPECT_EQ(b.name, "sim");
+    EXPECT_EQ(b.stage, "status_badge");
+    EXPECT_TRUE(fs::exists(b.sim_input)) << b.sim_input;
+    EXPECT_TRUE(fs::exists(b.sim_events)) << b.sim_events;
+    EXPECT_FALSE(b.sim_realtime);
+}
+
+TEST(Board, ValuesAndRelativePaths) {
+    const std::string p = write_board("ok.yaml",
+                                      "board: t\n"
+                                      "video: {latency_ms: 20.5, compose_budget_ms: 3}\n"
+                                      "analysis: {stage: none, max_overlay_age: 5}\n"
+                                      "sim: {input: clip.mp4, output: /tmp/x.mkv, realtime: yes}\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_DOUBLE_EQ(b.latency_ms, 20.5);
+    EXPECT_DOUBLE_EQ(b.compose_budget_ms, 3);
+    EXPECT_EQ(b.stage, "none");
+    EXPECT_EQ(b.max_overlay_age, 5);
+    EXPECT_EQ(b.sim_input, (fs::path(p).parent_path() / "clip.mp4").string());
+    EXPECT_EQ(b.sim_output, "/tmp/x.mkv");
+    EXPECT_TRUE(b.sim_realtime);
+}
+
+struct BadCase {
+    const char* text;
+    const char* message;  // after "FILE:"
+};
+
+TEST(Board, ErrorsNameTheLineAndField) {
+    const BadCase cases[] = {
+        {"board: t\nvideo:\n  latency_ms: fast\n",
+         "3: field 'video.latency_ms': expected a number, got 'fast'"},
+        {"board: t\nvideo:\n  latency_ms: -1\n", "3: field 'video.latency_ms': must be between 0 and 1000, got -1"},
+        {"board: t\nvideo:\n  latncy_ms: 3\n",
+         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms)"},
+        {"board: t\nanalysis:\n  stage: magic\n",
+         "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
+        {"board: t\nsim:\n  realtime: maybe\n", "3: field 'sim.realtime': expected true or false, got 'maybe'"},
+        {"board: t\nanalysis:\n  max_overlay_age: 2.5\n", "3: field 'analysis.max_overlay_age': expected an integer"},
+        {"video: {latency_ms: 1}\n", "1: field 'board': missing (the board's name)"},
+        {"board: t\nvideo: [1, 2\n", "3: not valid YAML: end of sequence flow not found"},
+    };
+    for (const auto& c : cases) {
+        const std::string p = write_board("bad.yaml", c.text);
+        BoardConfig b;
+        std::string err;
+        EXPECT_FALSE(load_board(p, b, err)) << c.text;
+        EXPECT_EQ(err, p + ":" + c.message) << c.text;
+    }
+}
+
+TEST(Board, MissingAndEmptyFiles) {
+    BoardConfig b;
+    std::string err;
+    EXPECT_FALSE(load_board("/nonexistent/board.yaml", b, err));
+    EXPECT_EQ(err, "board file not found or unreadable: /nonexistent/board.yaml");
+    const std::string p = write_board("empty.yaml", "");
+    EXPECT_FALSE(load_board(p, b, err));
+    EXPECT_EQ(err, p + ": board file is empty");
+}
+
+}  // namespace
+}  // namespace endotower::firmware
