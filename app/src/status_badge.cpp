@@ -32,6 +32,7 @@ void StatusBadge::measure(const hal::Frame& frame, int step, double& light, doub
                 case hal::PixelFormat::kYuyv: l = row[2 * x]; break;
                 case hal::PixelFormat::kUyvy: l = row[2 * x + 1]; break;
             }
+            if (l <= kSurround) continue;
             sum += l;
             hot += l >= 250;
             ++n;
@@ -56,18 +57,29 @@ void StatusBadge::configure(const hal::FrameFormat& format) {
         const char text[2] = {static_cast<char>(kFirstGlyph + g), 0};
         cv::putText(cell, text, cv::Point(0, cell_h_ - baseline - scale_), cv::FONT_HERSHEY_SIMPLEX,
                     font_scale, cv::Scalar(255), thickness, cv::LINE_AA);
+        int b = 0;
+        advance_[static_cast<std::size_t>(g)] =
+            cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, font_scale, thickness, &b).width + scale_;
     }
     button_down_ = false;
     wheel_total_ = 0;
 }
 
+int StatusBadge::text_width(const char* text) const {
+    int w = 0;
+    for (int i = 0; text[i] != 0; ++i)
+        if (text[i] >= kFirstGlyph && text[i] <= kLastGlyph) w += advance_[static_cast<std::size_t>(text[i] - kFirstGlyph)];
+    return w;
+}
+
 void StatusBadge::draw_text(OverlayCanvas& canvas, int x0, int y0, const char* text) const {
+    int gx = x0;
     for (int i = 0; text[i] != 0; ++i) {
         const char c = text[i];
         if (c < kFirstGlyph || c > kLastGlyph) continue;
         const std::uint8_t* glyph =
             glyphs_.data() + static_cast<std::size_t>(c - kFirstGlyph) * cell_w_ * cell_h_;
-        const int gx = x0 + i * cell_w_;
+        const int advance = advance_[static_cast<std::size_t>(c - kFirstGlyph)];
         for (int y = 0; y < cell_h_; ++y) {
             const int py = y0 + y;
             if (py < 0 || py >= canvas.height()) continue;
@@ -82,6 +94,7 @@ void StatusBadge::draw_text(OverlayCanvas& canvas, int x0, int y0, const char* t
                 p[3] = static_cast<std::uint8_t>(p[3] + ((255 - p[3]) * a + 127) / 255);
             }
         }
+        gx += advance;
     }
 }
 
@@ -97,10 +110,9 @@ void StatusBadge::process(AnalysisContext& ctx) {
     const char* band = percent < 30 ? "0-30" : percent <= 45 ? "30-45" : "46-100";
 
     char text[48];
-    std::snprintf(text, sizeof text, "LIGHT %3d%%%s", percent, button_down_ ? "  BTN" : "");
-    const int len = static_cast<int>(std::char_traits<char>::length(text));
+    std::snprintf(text, sizeof text, "LIGHT %d%%%s", percent, button_down_ ? "  BTN" : "");
     const int pad = 4 * scale_;
-    const hal::Rect box{8 * scale_, 8 * scale_, len * cell_w_ + 2 * pad + 3 * cell_h_ / 2, cell_h_ + 2 * pad};
+    const hal::Rect box{8 * scale_, 8 * scale_, text_width(text) + 2 * pad + 3 * cell_h_ / 2, cell_h_ + 2 * pad};
     ctx.overlay.fill(box, Rgba{20, 20, 20, 170});
     // The light band as a coloured square at the badge's left.
     const Rgba band_colour = percent < 30 ? Rgba{230, 40, 40, 255}

@@ -158,7 +158,7 @@ int run_sim_command(const std::vector<std::string>& args) {
         std::fprintf(stderr, "endotower sim: %s\n", source.error().c_str());
         return kExitBadInput;
     }
-    const double fps = 1e9 / static_cast<double>(source.frame_period());
+    const double fps = source.frame_rate();
     sim::FileSink sink({board.sim_output, board.sim_frames, fps}, *clock);
 
     app::TraceWriter trace;
@@ -168,7 +168,7 @@ int run_sim_command(const std::vector<std::string>& args) {
     }
 
     // Timeline times count from the first frame's capture, which is "now" at start.
-    sim::ScriptedInput scripted(timeline, *clock, clock->now(), source.frame_period());
+    sim::ScriptedInput scripted(timeline, *clock, clock->now(), fps);
     hal::ControlMerge inputs;
     inputs.attach(&scripted);
 

@@ -16,14 +16,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct CommandResult {
     int status = -1;
     std::string output;  // stdout and stderr
 };
 
-Run run(const std::string& args) {
+CommandResult run(const std::string& args) {
     const std::string cmd = std::string(ENDOTOWER_BINARY) + " " + args + " 2>&1";
-    Run r;
+    CommandResult r;
     FILE* p = popen(cmd.c_str(), "r");
     if (p == nullptr) return r;
     std::array<char, 4096> buf{};
@@ -42,6 +42,7 @@ fs::path fresh_dir(const std::string& name) {
 
 // Numbered PNG frames with distinct, textured content (a gradient that moves).
 void write_frames(const fs::path& dir, int n, int w, int h) {
+    fs::create_directories(dir);
     for (int i = 0; i < n; ++i) {
         cv::Mat m(h, w, CV_8UC3);
         for (int y = 0; y < h; ++y)
@@ -71,12 +72,12 @@ std::vector<endotower::app::TraceRecord> load(const fs::path& p) {
     return recs;
 }
 
-const std::string kBoard = std::string("--board ") + ENDOTOWER_SOURCE_DIR + "/board/sim/board.yaml ";
+const std::string kBoard = std::string("sim --board ") + ENDOTOWER_SOURCE_DIR + "/board/sim/board.yaml ";
 
 TEST(Replay, EveryFrameOutInOrderWithTheConfiguredLatencyAndExactPassthrough) {
     const fs::path d = fresh_dir("order");
-    write_frames(d / "in", 40, 320, 240);
-    const Run r = run(kBoard + "--input " + (d / "in").string() + " --frames " + (d / "out").string() +
+    write_frames(d / "in", 40, 640, 480);
+    const CommandResult r = run(kBoard + "--input " + (d / "in").string() + " --frames " + (d / "out").string() +
                       " --trace " + (d / "trace.jsonl").string() + " --latency-ms 50 --out ''");
     ASSERT_EQ(r.status, 0) << r.output;
     const auto recs = load(d / "trace.jsonl");
@@ -88,7 +89,9 @@ TEST(Replay, EveryFrameOutInOrderWithTheConfiguredLatencyAndExactPassthrough) {
         EXPECT_EQ(t.latency_ns, 50'000'000) << i;
         EXPECT_EQ(t.present_ns - t.capture_ns, 50'000'000) << i;
         EXPECT_FALSE(t.late);
-        if (i > 0) EXPECT_EQ(t.capture_ns - recs[static_cast<std::size_t>(i - 1)].capture_ns, 40'000'000);
+        if (i > 0) {
+            EXPECT_EQ(t.capture_ns - recs[static_cast<std::size_t>(i - 1)].capture_ns, 40000000);
+        }
         // Output frame i is input frame i, bit for bit, outside the corner badge.
         const cv::Mat in = cv::imread((d / "in" / (std::to_string(i) + ".png")).string());
         char name[32];
@@ -106,7 +109,7 @@ TEST(Replay, WithoutAnalysisTheOutputIsTheInputBitForBit) {
     const fs::path d = fresh_dir("exact");
     write_frames(d / "in", 10, 160, 120);
     std::ofstream(d / "board.yaml") << "board: t\nanalysis: {stage: none}\n";
-    const Run r = run("--board " + (d / "board.yaml").string() + " --input " + (d / "in").string() +
+    const CommandResult r = run("sim --board " + (d / "board.yaml").string() + " --input " + (d / "in").string() +
                       " --frames " + (d / "out").string() + " --out " + (d / "out.mkv").string());
     ASSERT_EQ(r.status, 0) << r.output;
     cv::VideoCapture cap((d / "out.mkv").string());
@@ -127,7 +130,7 @@ TEST(Replay, DeterministicReplayIsIdenticalRunToRun) {
     std::string traces[2];
     for (int k = 0; k < 2; ++k) {
         const fs::path o = d / std::to_string(k);
-        const Run r = run(kBoard + "--frames " + o.string() + " --trace " + (o / "t.jsonl").string() +
+        const CommandResult r = run(kBoard + "--frames " + o.string() + " --trace " + (o / "t.jsonl").string() +
                           " --out ''");
         ASSERT_EQ(r.status, 0) << r.output;
         // Wall-clock stage timings are measurements; everything else must match.
@@ -150,7 +153,7 @@ TEST(Replay, DeterministicReplayIsIdenticalRunToRun) {
 
 TEST(Replay, BundledRecordingWithTimeline) {
     const fs::path d = fresh_dir("bundled");
-    const Run r = run(kBoard + "--out " + (d / "out.mkv").string() + " --trace " + (d / "t.jsonl").string());
+    const CommandResult r = run(kBoard + "--out " + (d / "out.mkv").string() + " --trace " + (d / "t.jsonl").string());
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("180 frames in, 180 out, 0 late"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("target 33.333 ms; min 33.333, median 33.333, p99 33.333, max 33.333 ms"),
@@ -185,7 +188,7 @@ TEST(Replay, TruncatedRecordingStillYieldsValidOutputs) {
         for (int i = 0; i < 60; ++i) w.write(cv::Mat(240, 320, CV_8UC3, cv::Scalar(i * 4, 100, 200 - i * 3)));
     }
     fs::resize_file(d / "in.avi", fs::file_size(d / "in.avi") / 2);
-    const Run r = run(kBoard + "--input " + (d / "in.avi").string() + " --out " + (d / "out.mkv").string() +
+    const CommandResult r = run(kBoard + "--input " + (d / "in.avi").string() + " --out " + (d / "out.mkv").string() +
                       " --trace " + (d / "t.jsonl").string() + " --events ''");
     ASSERT_EQ(r.status, 0) << r.output;
     const auto recs = load(d / "t.jsonl");
@@ -202,7 +205,7 @@ TEST(Replay, RealLaparoscopicClip) {
     const fs::path frames = fs::path(ENDOTOWER_SHARED_DATA) / "sznitman_lap" / "frames";
     if (!fs::is_directory(frames)) GTEST_SKIP() << "skipped: " << frames << " is absent";
     const fs::path d = fresh_dir("sznitman");
-    const Run r = run(kBoard + "--input " + frames.string() + " --out '' --frames " + (d / "out").string() +
+    const CommandResult r = run(kBoard + "--input " + frames.string() + " --out '' --frames " + (d / "out").string() +
                       " --trace " + (d / "t.jsonl").string() + " --events ''");
     ASSERT_EQ(r.status, 0) << r.output;
     const auto recs = load(d / "t.jsonl");
@@ -219,7 +222,7 @@ TEST(Replay, RealLaparoscopicClip) {
 }
 
 TEST(Cli, HelpAndVersion) {
-    Run r = run("--help");
+    CommandResult r = run("--help");
     EXPECT_EQ(r.status, 0);
     EXPECT_NE(r.output.find("sim"), std::string::npos);
     r = run("--version");
@@ -253,7 +256,7 @@ TEST(Cli, BadInputIsNamedWithExitCode2) {
         {"launch", "unknown command 'launch'"},
     };
     for (const auto& c : cases) {
-        const Run r = run(c.args);
+        const CommandResult r = run(c.args);
         EXPECT_EQ(r.status, 2) << c.args << "\n" << r.output;
         EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
     }

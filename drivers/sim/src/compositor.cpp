@@ -44,9 +44,8 @@ inline std::uint64_t load64(const std::uint8_t* p) {
 template <int kBpp>
 void blend_run(std::uint8_t* dst, const std::uint8_t* ov, int n) {
     // Byte 3 of each of the two pixels in a 64-bit load.
-    constexpr std::uint64_t kAlpha = std::endian::native == std::endian::little
-                                         ? 0xFF000000FF000000ull
-                                         : 0x000000FF000000FFull;
+    constexpr std::uint64_t kAlpha =
+        std::endian::native == std::endian::little ? 0xFF000000FF000000ull : 0x000000FF000000FFull;
     int i = 0;
     for (; i + 4 <= n; i += 4, ov += 16, dst += 4 * kBpp) {
         const std::uint64_t w0 = load64(ov);
@@ -151,8 +150,7 @@ bool overlay_fits(const FrameFormat& f, const OverlayLayer& overlay) {
 
 }  // namespace
 
-bool blend_in_place(const FrameFormat& format, std::uint8_t* pixels,
-                    const OverlayLayer& overlay) {
+bool blend_in_place(const FrameFormat& format, std::uint8_t* pixels, const OverlayLayer& overlay) {
     if (!blendable(format) || pixels == nullptr) return false;
     if (overlay.empty()) return true;
     if (!overlay_fits(format, overlay)) return false;
@@ -167,8 +165,8 @@ bool compose(const hal::Frame& video, const OverlayLayer* overlay, std::uint8_t*
              int out_stride) {
     const FrameFormat& f = video.format;
     if (!blendable(f) || video.data == nullptr || out == nullptr) return false;
-    const std::size_t row_bytes =
-        static_cast<std::size_t>(f.width) * static_cast<std::size_t>(hal::bytes_per_pixel(f.pixel_format));
+    const std::size_t row_bytes = static_cast<std::size_t>(f.width) *
+                                  static_cast<std::size_t>(hal::bytes_per_pixel(f.pixel_format));
     if (out_stride < 0 || static_cast<std::size_t>(out_stride) < row_bytes) return false;
     if (overlay != nullptr && !overlay->empty() && !overlay_fits(f, *overlay)) return false;
 

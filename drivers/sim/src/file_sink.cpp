@@ -32,10 +32,14 @@ std::string describe(const FrameFormat& f) {
 
 // The codec for a container, chosen by the file's extension.
 bool fourcc_for(const std::string& ext, int& fourcc) {
-    if (ext == ".mkv") fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');  // lossless
-    else if (ext == ".avi") fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
-    else if (ext == ".mp4") fourcc = cv::VideoWriter::fourcc('m', 'p', '4', 'v');
-    else return false;
+    if (ext == ".mkv")
+        fourcc = cv::VideoWriter::fourcc('F', 'F', 'V', '1');  // lossless
+    else if (ext == ".avi")
+        fourcc = cv::VideoWriter::fourcc('M', 'J', 'P', 'G');
+    else if (ext == ".mp4")
+        fourcc = cv::VideoWriter::fourcc('m', 'p', '4', 'v');
+    else
+        return false;
     return true;
 }
 
@@ -46,8 +50,8 @@ bool write_all(const std::string& path, const std::vector<uchar>& data) {
     if (fd < 0) return false;
     std::size_t done = 0;
     while (done < data.size()) {
-        const ssize_t n =
-            system::retry_eintr([&] { return ::write(fd, data.data() + done, data.size() - done); });
+        const ssize_t n = system::retry_eintr(
+            [&] { return ::write(fd, data.data() + done, data.size() - done); });
         if (n < 0) {
             const int err = errno;
             ::close(fd);
@@ -100,8 +104,7 @@ struct FileSink::Impl {
             const fs::path p(opt.video_path);
             video_ext = p.extension().string();
             video_stem = p.stem().string();
-            video_dir = p.parent_path().string();
-            if (video_dir.empty()) video_dir = ".";
+            video_dir = p.has_parent_path() ? p.parent_path().string() : std::string(".");
             if (!fourcc_for(video_ext, fourcc))
                 return fail("cannot write video " + opt.video_path + ": unsupported extension '" +
                             video_ext + "' (use .mkv, .avi or .mp4)");
@@ -110,9 +113,11 @@ struct FileSink::Impl {
             if (ec)
                 return fail("cannot write video " + opt.video_path + ": cannot create " +
                             video_dir + ": " + ec.message());
-            if (::access(video_dir.c_str(), W_OK) != 0)
+            if (::access(video_dir.c_str(), W_OK) != 0) {
+                const int err = errno;  // before anything else can change it
                 return fail("cannot write video " + opt.video_path + ": " +
-                            system::errno_message("access", video_dir, errno));
+                            system::errno_message("access", video_dir, err));
+            }
         }
         if (!opt.frames_dir.empty()) {
             std::error_code ec;
@@ -120,9 +125,11 @@ struct FileSink::Impl {
             if (ec)
                 return fail("cannot create frames directory " + opt.frames_dir + ": " +
                             ec.message());
-            if (::access(opt.frames_dir.c_str(), W_OK) != 0)
+            if (::access(opt.frames_dir.c_str(), W_OK) != 0) {
+                const int err = errno;
                 return fail("frames directory not writable: " +
-                            system::errno_message("access", opt.frames_dir, errno));
+                            system::errno_message("access", opt.frames_dir, err));
+            }
             // Room for "/.NNNNNNNNNN.tmp.png" so that present() never allocates.
             png_path.reserve(opt.frames_dir.size() + 32);
             png_tmp.reserve(opt.frames_dir.size() + 32);
@@ -151,6 +158,12 @@ struct FileSink::Impl {
         }
         if (!ok) {
             ::unlink(segment_tmp.c_str());
+            // FFmpeg does not say why; a directory that went away is the likelier cause.
+            if (::access(video_dir.c_str(), W_OK) != 0) {
+                const int err = errno;
+                return fail("cannot write video " + segment_path + ": " +
+                            system::errno_message("access", video_dir, err));
+            }
             return fail("cannot write video " + segment_path + ": no encoder for " + video_ext +
                         " (FFmpeg could not open the writer)");
         }
@@ -168,9 +181,11 @@ struct FileSink::Impl {
         }
         ++segment;  // a later frame starts the next segment, never overwrites this one
         segment_frames = 0;
-        if (::rename(segment_tmp.c_str(), segment_path.c_str()) != 0)
+        if (::rename(segment_tmp.c_str(), segment_path.c_str()) != 0) {
+            const int err = errno;
             return fail("cannot finish video: " +
-                        system::errno_message("rename", segment_tmp + " -> " + segment_path, errno));
+                        system::errno_message("rename", segment_tmp + " -> " + segment_path, err));
+        }
         return true;
     }
 
@@ -225,7 +240,8 @@ struct FileSink::Impl {
                 cv::cvtColor(cv::Mat(f.height * 3 / 2, f.width, CV_8UC1, video.data, step), bgr,
                              cv::COLOR_YUV2BGR_NV12);
                 break;
-            case PixelFormat::kBgr24: break;
+            case PixelFormat::kBgr24:
+                break;
         }
         if (overlay == nullptr || overlay->empty()) return true;
         const FrameFormat out{f.width, f.height, static_cast<int>(bgr.step), PixelFormat::kBgr24};
@@ -319,7 +335,11 @@ bool FileSink::finish() {
     }
 }
 
-const std::string& FileSink::error() const { return impl_->error; }
-std::int64_t FileSink::frames_written() const { return impl_->written; }
+const std::string& FileSink::error() const {
+    return impl_->error;
+}
+std::int64_t FileSink::frames_written() const {
+    return impl_->written;
+}
 
 }  // namespace endotower::sim

@@ -3,28 +3,25 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
-#include <charconv>
-#include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <vector>
 
 #include "endotower/system/syscall.hpp"
+#include "frame_pool.hpp"
+#include "image_sequence.hpp"
 
 namespace endotower::sim {
 
 namespace {
 
 namespace fs = std::filesystem;
+using detail::to_bgr24;
 using hal::FrameFormat;
 using hal::Nanos;
 using hal::PixelFormat;
@@ -33,72 +30,11 @@ using hal::SourceStatus;
 constexpr double kDefaultFps = 25.0;
 constexpr double kMaxFps = 1000.0;  // above this a container's rate is nonsense
 
-bool is_image_name(const fs::path& p) {
-    std::string ext = p.extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tif" ||
-           ext == ".tiff";
+double sane_fps(double fps) {
+    return !std::isfinite(fps) || fps <= 0.0 || fps > kMaxFps ? kDefaultFps : fps;
 }
 
-// Numbered frames sort by the last number in the stem ("frame_2" before "frame_10");
-// names without a number follow in name order.
-struct ImageName {
-    bool numbered = false;
-    std::uint64_t number = 0;
-    std::string name;
-    std::string path;
-};
-
-ImageName make_image_name(const fs::path& p) {
-    ImageName n;
-    n.name = p.filename().string();
-    n.path = p.string();
-    const std::string stem = p.stem().string();
-    std::size_t end = stem.size();
-    while (end > 0 && !std::isdigit(static_cast<unsigned char>(stem[end - 1]))) --end;
-    std::size_t begin = end;
-    while (begin > 0 && std::isdigit(static_cast<unsigned char>(stem[begin - 1]))) --begin;
-    if (begin < end) {
-        const auto r = std::from_chars(stem.data() + begin, stem.data() + end, n.number);
-        n.numbered = r.ec == std::errc();
-    }
-    return n;
-}
-
-Nanos period_from_fps(double fps) {
-    if (!std::isfinite(fps) || fps <= 0.0 || fps > kMaxFps) fps = kDefaultFps;
-    return static_cast<Nanos>(std::llround(1e9 / fps));
-}
-
-// Brings any decoded image to 8-bit, 3-channel BGR. `scratch` keeps the converted
-// pixels; returns false for layouts that have no sensible BGR reading.
-bool to_bgr24(const cv::Mat& in, cv::Mat& scratch, const cv::Mat*& result) {
-    if (in.empty()) return false;
-    if (in.type() == CV_8UC3) {
-        result = &in;
-        return true;
-    }
-    const int cn = in.channels();
-    if (cn != 1 && cn != 3 && cn != 4) return false;
-    const cv::Mat* src = &in;
-    cv::Mat depth8;
-    if (in.depth() != CV_8U) {
-        // 16-bit spans 0..65535, float images 0..1.
-        const double scale = in.depth() == CV_16U   ? 1.0 / 257.0
-                             : in.depth() >= CV_32F ? 255.0
-                                                    : 1.0;
-        in.convertTo(depth8, CV_8U, scale);
-        src = &depth8;
-    }
-    if (cn == 1)
-        cv::cvtColor(*src, scratch, cv::COLOR_GRAY2BGR);
-    else if (cn == 4)
-        cv::cvtColor(*src, scratch, cv::COLOR_BGRA2BGR);
-    else
-        src->copyTo(scratch);
-    result = &scratch;
-    return true;
-}
+Nanos period_from_fps(double fps) { return static_cast<Nanos>(std::llround(1e9 / sane_fps(fps))); }
 
 FrameFormat bgr24_format(int width, int height) {
     return FrameFormat{width, height, width * 3, PixelFormat::kBgr24};
@@ -124,6 +60,7 @@ struct RecordedFrameSource::Impl {
 
     FrameFormat format{};
     Nanos period = period_from_fps(kDefaultFps);
+    double fps = kDefaultFps;  // capture times come from it, so they do not drift
     Nanos t0 = 0;
     std::int64_t expected = 0;
     std::int64_t read = 0;
@@ -140,12 +77,7 @@ struct RecordedFrameSource::Impl {
     int ready_slot = -1;
     std::int64_t ready_index = 0;
 
-    // The pool. The outer vector is sized in start(); a slot's bytes are touched only
-    // by the capture thread while the slot is not lent, so only `lent` needs the lock.
-    std::vector<std::vector<std::uint8_t>> buffers;
-    std::mutex mu;
-    std::condition_variable freed;
-    std::vector<char> lent;
+    FramePool pool;
 
     Impl(RecordedSourceOptions o, hal::Clock& c) : opt(std::move(o)), clock(c) {}
 
@@ -192,26 +124,12 @@ struct RecordedFrameSource::Impl {
 
     bool open_directory() {
         std::error_code ec;
-        std::vector<ImageName> names;
-        for (fs::directory_iterator it(opt.path, ec), end; !ec && it != end; it.increment(ec)) {
-            const fs::path& p = it->path();
-            // Hidden files include the FileSink's ".NAME.tmp.png" temporaries.
-            if (p.filename().string().starts_with('.') || !is_image_name(p)) continue;
-            std::error_code ec2;
-            if (!it->is_regular_file(ec2)) continue;
-            names.push_back(make_image_name(p));
-        }
+        files = detail::list_image_sequence(opt.path, ec);
         if (ec) return fail("cannot list recording directory: " + opt.path + ": " + ec.message());
-        if (names.empty()) return fail("no images (png/jpg/bmp/tif) in directory: " + opt.path);
-        std::sort(names.begin(), names.end(), [](const ImageName& a, const ImageName& b) {
-            if (a.numbered != b.numbered) return a.numbered;
-            if (a.numbered && a.number != b.number) return a.number < b.number;
-            return a.name < b.name;
-        });
-        files.reserve(names.size());
-        for (ImageName& n : names) files.push_back(std::move(n.path));
+        if (files.empty()) return fail("no images (png/jpg/bmp/tif) in directory: " + opt.path);
         expected = static_cast<std::int64_t>(files.size());
-        period = period_from_fps(opt.fps_override > 0.0 ? opt.fps_override : kDefaultFps);
+        fps = sane_fps(opt.fps_override > 0.0 ? opt.fps_override : kDefaultFps);
+        period = period_from_fps(fps);
 
         // The first readable image gives the format; unreadable ones before it are skipped.
         while (next_file < files.size()) {
@@ -228,17 +146,19 @@ struct RecordedFrameSource::Impl {
     }
 
     bool open_video() {
-        if (::access(opt.path.c_str(), R_OK) != 0)
+        if (::access(opt.path.c_str(), R_OK) != 0) {
+            const int err = errno;  // before anything else can change it
             return fail("recording not readable: " +
-                        system::errno_message("access", opt.path, errno));
+                        system::errno_message("access", opt.path, err));
+        }
         try {
             if (!cap.open(opt.path, cv::CAP_FFMPEG) || !cap.isOpened())
                 return fail("cannot decode video: " + opt.path +
                             " (unsupported codec or not a video)");
             const double count = cap.get(cv::CAP_PROP_FRAME_COUNT);
             expected = std::isfinite(count) && count > 0 ? static_cast<std::int64_t>(count) : 0;
-            period = period_from_fps(opt.fps_override > 0.0 ? opt.fps_override
-                                                            : cap.get(cv::CAP_PROP_FPS));
+            fps = sane_fps(opt.fps_override > 0.0 ? opt.fps_override : cap.get(cv::CAP_PROP_FPS));
+            period = period_from_fps(fps);
             cv::Mat first;
             const cv::Mat* bgr = nullptr;
             if (!cap.read(first) || !to_bgr24(first, scratch, bgr))
@@ -269,39 +189,11 @@ struct RecordedFrameSource::Impl {
         return true;
     }
 
-    // A free slot, waiting (in real time) up to timeout_ns for a release(); -1 if none.
-    int acquire(Nanos timeout_ns) {
-        std::unique_lock lock(mu);
-        auto find = [&] {
-            for (std::size_t i = 0; i < lent.size(); ++i)
-                if (!lent[i]) return static_cast<int>(i);
-            return -1;
-        };
-        int slot = find();
-        if (slot < 0 && timeout_ns > 0) {
-            freed.wait_for(lock, std::chrono::nanoseconds(timeout_ns),
-                           [&] { return (slot = find()) >= 0; });
-        }
-        if (slot < 0) return -1;
-        lent[slot] = 1;
-        lock.unlock();
-        // Only a format change to a larger size grows a buffer.
-        std::vector<std::uint8_t>& buf = buffers[slot];
-        if (buf.size() < format.size_bytes()) buf.resize(format.size_bytes());
-        return slot;
-    }
-
-    void give_back(int slot) {
-        {
-            std::lock_guard lock(mu);
-            lent[slot] = 0;
-        }
-        freed.notify_one();
-    }
+    int acquire(Nanos timeout_ns) { return pool.acquire(format.size_bytes(), timeout_ns); }
 
     void copy_staged(int slot) {
         const cv::Mat& m = staged;
-        std::uint8_t* dst = buffers[slot].data();
+        std::uint8_t* dst = pool.data(slot);
         const std::size_t row = static_cast<std::size_t>(format.width) * 3;
         for (int y = 0; y < format.height; ++y)
             std::memcpy(dst + static_cast<std::size_t>(y) * format.stride, m.ptr(y), row);
@@ -352,7 +244,7 @@ struct RecordedFrameSource::Impl {
         if (slot < 0) return SourceStatus::kTimeout;
         // Decode straight into the pool buffer: read() reuses a Mat of the right size
         // and type instead of allocating.
-        cv::Mat m(format.height, format.width, CV_8UC3, buffers[slot].data(),
+        cv::Mat m(format.height, format.width, CV_8UC3, pool.data(slot),
                   static_cast<std::size_t>(format.stride));
         std::uint8_t* const wanted = m.data;
         bool ok = false;
@@ -362,7 +254,7 @@ struct RecordedFrameSource::Impl {
             warning = "decoding " + opt.path + " failed: " + e.what();
         }
         if (!ok) {
-            give_back(slot);
+            pool.release(slot);
             end_video();
             return SourceStatus::kEndOfStream;
         }
@@ -371,14 +263,14 @@ struct RecordedFrameSource::Impl {
             // The decoder produced another size or layout: convert it outside the pool.
             const cv::Mat* bgr = nullptr;
             if (!to_bgr24(m, scratch, bgr)) {
-                give_back(slot);
+                pool.release(slot);
                 error = "video " + opt.path + ": frame " + std::to_string(index) +
                         " has an unsupported pixel layout";
                 return SourceStatus::kError;
             }
             bgr->copyTo(staged);
             if (staged.cols != format.width || staged.rows != format.height) {
-                give_back(slot);
+                pool.release(slot);
                 has_staged = true;
                 staged_index = index;
                 format = bgr24_format(staged.cols, staged.rows);
@@ -400,8 +292,9 @@ struct RecordedFrameSource::Impl {
             const SourceStatus s = fill(timeout_ns);
             if (s != SourceStatus::kFrame) return s;
         }
-        // Frame i is captured at t0 + i * period; a virtual clock may already be past it.
-        const Nanos due = t0 + ready_index * period;
+        // Frame i is captured at t0 + i / fps, rounded to the ns (not i * rounded
+        // period, which drifts); a virtual clock may already be past it.
+        const Nanos due = t0 + static_cast<Nanos>(std::llround(static_cast<double>(ready_index) * 1e9 / fps));
         const Nanos now = clock.now();
         if (now < due) {
             if (!clock.is_virtual() && due - now > timeout_ns) {
@@ -412,7 +305,7 @@ struct RecordedFrameSource::Impl {
             clock.sleep_until(due);
         }
         out.format = format;
-        out.data = buffers[ready_slot].data();
+        out.data = pool.data(ready_slot);
         out.capture_ns = due;
         out.sequence = static_cast<std::uint64_t>(ready_index);
         out.buffer_index = ready_slot;
@@ -440,18 +333,10 @@ bool RecordedFrameSource::start() {
     if (d.started) return true;
     if (!d.opened && !open()) return false;
     const int n = std::max(1, d.opt.buffer_count);
-    try {
-        // Every buffer is allocated here, at the first format's size.
-        d.buffers.assign(static_cast<std::size_t>(n),
-                         std::vector<std::uint8_t>(d.format.size_bytes()));
-    } catch (const std::bad_alloc&) {
+    // Every buffer is allocated here, at the first format's size.
+    if (!d.pool.allocate(n, d.format.size_bytes()))
         return d.fail("recording " + d.opt.path + ": cannot allocate " + std::to_string(n) +
                       " frame buffers");
-    }
-    {
-        std::lock_guard lock(d.mu);
-        d.lent.assign(static_cast<std::size_t>(n), 0);
-    }
     d.t0 = d.clock.now();
     d.started = true;
     return true;
@@ -462,7 +347,7 @@ void RecordedFrameSource::stop() {
     // Lent buffers stay valid until the source is destroyed or started again; a new
     // start() replays from the first frame.
     d.cap.release();
-    if (d.ready_slot >= 0) d.give_back(d.ready_slot);
+    if (d.ready_slot >= 0) d.pool.release(d.ready_slot);
     d.ready_slot = -1;
     d.started = false;
     d.opened = false;
@@ -478,24 +363,37 @@ hal::SourceStatus RecordedFrameSource::next(hal::Frame& out, hal::Nanos timeout_
 }
 
 void RecordedFrameSource::release(const hal::Frame& frame) {
-    Impl& d = *impl_;
-    {
-        std::lock_guard lock(d.mu);
-        const int i = frame.buffer_index;
-        if (i < 0 || static_cast<std::size_t>(i) >= d.lent.size() || !d.lent[i]) return;
-        d.lent[i] = 0;
-    }
-    d.freed.notify_one();
+    impl_->pool.release(frame.buffer_index);
 }
 
-hal::FrameFormat RecordedFrameSource::format() const { return impl_->format; }
-hal::Nanos RecordedFrameSource::frame_period() const { return impl_->period; }
-int RecordedFrameSource::buffer_count() const { return std::max(1, impl_->opt.buffer_count); }
-const std::string& RecordedFrameSource::error() const { return impl_->error; }
-std::int64_t RecordedFrameSource::expected_frames() const { return impl_->expected; }
-std::int64_t RecordedFrameSource::frames_read() const { return impl_->read; }
-std::int64_t RecordedFrameSource::skipped_frames() const { return impl_->skipped; }
-bool RecordedFrameSource::truncated() const { return impl_->truncated; }
-const std::string& RecordedFrameSource::warning() const { return impl_->warning; }
+hal::FrameFormat RecordedFrameSource::format() const {
+    return impl_->format;
+}
+double RecordedFrameSource::frame_rate() const { return impl_->fps; }
+
+hal::Nanos RecordedFrameSource::frame_period() const {
+    return impl_->period;
+}
+int RecordedFrameSource::buffer_count() const {
+    return std::max(1, impl_->opt.buffer_count);
+}
+const std::string& RecordedFrameSource::error() const {
+    return impl_->error;
+}
+std::int64_t RecordedFrameSource::expected_frames() const {
+    return impl_->expected;
+}
+std::int64_t RecordedFrameSource::frames_read() const {
+    return impl_->read;
+}
+std::int64_t RecordedFrameSource::skipped_frames() const {
+    return impl_->skipped;
+}
+bool RecordedFrameSource::truncated() const {
+    return impl_->truncated;
+}
+const std::string& RecordedFrameSource::warning() const {
+    return impl_->warning;
+}
 
 }  // namespace endotower::sim

@@ -1,6 +1,7 @@
 #include "endotower/sim/scripted_input.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace endotower::sim {
@@ -9,25 +10,27 @@ namespace {
 
 constexpr hal::Nanos kNever = std::numeric_limits<hal::Nanos>::max();
 
-// start + n * period, saturating: an absurd frame index fires "never", not in the past.
-hal::Nanos frame_time(hal::Nanos start, std::int64_t n, hal::Nanos period) {
-    hal::Nanos offset = 0;
+// start + n / fps rounded to the ns, the same formula as RecordedFrameSource's capture
+// times, so "frame N" fires exactly with frame N. Saturating: an absurd frame index
+// fires "never", not in the past.
+hal::Nanos frame_time(hal::Nanos start, std::int64_t n, double fps) {
+    const double offset = static_cast<double>(n) * 1e9 / fps;
+    if (!(offset < 9.0e18)) return kNever;
     hal::Nanos t = 0;
-    if (__builtin_mul_overflow(n, period, &offset) || __builtin_add_overflow(start, offset, &t))
-        return kNever;
+    if (__builtin_add_overflow(start, static_cast<hal::Nanos>(std::llround(offset)), &t)) return kNever;
     return t;
 }
 
 }  // namespace
 
-ScriptedInput::ScriptedInput(const Timeline& timeline, const hal::Clock& clock,
-                             hal::Nanos start_ns, hal::Nanos frame_period)
+ScriptedInput::ScriptedInput(const Timeline& timeline, const hal::Clock& clock, hal::Nanos start_ns,
+                             double fps)
     : clock_(clock) {
     events_.reserve(timeline.entries.size());
     for (const TimelineEntry& e : timeline.entries) {
         hal::ControlEvent ev = e.event;
         if (e.anchor == TimelineEntry::Anchor::kFrame) {
-            ev.time_ns = frame_time(start_ns, e.frame, frame_period);
+            ev.time_ns = frame_time(start_ns, e.frame, fps);
         } else if (__builtin_add_overflow(start_ns, e.offset_ns, &ev.time_ns)) {
             ev.time_ns = kNever;
         }

@@ -20,7 +20,9 @@ constexpr int kMaxButton = 7;
 // Beyond this many seconds the offset would overflow int64 nanoseconds.
 constexpr double kMaxSeconds = 9.0e9;
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool is_space(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 // Splits one line into whitespace-separated fields, without allocating.
 class Fields {
@@ -122,8 +124,8 @@ bool parse_timeline(std::string_view text, std::string_view name, Timeline& out,
         std::string_view arg = fields.next();
         ControlEvent& ev = entry.event;
         if (kind.empty()) {
-            return fail("missing event after " + std::string(anchor) + ' ' +
-                        std::string(value) + " (expected press, release or wheel)");
+            return fail("missing event after " + std::string(anchor) + ' ' + std::string(value) +
+                        " (expected press, release or wheel)");
         } else if (kind == "press" || kind == "release") {
             ev.kind = kind == "press" ? ControlEvent::Kind::kButtonPress
                                       : ControlEvent::Kind::kButtonRelease;
@@ -136,8 +138,7 @@ bool parse_timeline(std::string_view text, std::string_view name, Timeline& out,
             }
         } else if (kind == "wheel") {
             ev.kind = ControlEvent::Kind::kWheel;
-            if (arg.empty())
-                return fail("wheel needs a delta (non-zero integer in -1000..1000)");
+            if (arg.empty()) return fail("wheel needs a delta (non-zero integer in -1000..1000)");
             std::int64_t d = 0;
             if (!parse_int(arg, d) || d == 0 || d < -kMaxWheelDelta || d > kMaxWheelDelta)
                 return fail("wheel delta must be a non-zero integer in -1000..1000, got " +
@@ -160,20 +161,22 @@ bool load_timeline(const std::string& path, Timeline& out, std::string& error) {
     };
     std::unique_ptr<std::FILE, Closer> file(std::fopen(path.c_str(), "rb"));
     if (!file) {
-        error = "cannot read timeline: " + system::errno_message("open", path, errno);
+        const int err = errno;  // before anything else can change it
+        error = "cannot read timeline: " + system::errno_message("open", path, err);
         return false;
     }
     std::string text;
     char buf[4096];
     for (;;) {
         const std::size_t n = std::fread(buf, 1, sizeof buf, file.get());
+        if (n < sizeof buf && std::ferror(file.get())) {
+            // fread reports EISDIR for a directory opened by mistake.
+            const int err = errno;
+            error = "cannot read timeline: " + system::errno_message("read", path, err);
+            return false;
+        }
         text.append(buf, n);
         if (n < sizeof buf) break;
-    }
-    if (std::ferror(file.get())) {
-        // fread reports EISDIR for a directory opened by mistake.
-        error = "cannot read timeline: " + system::errno_message("read", path, errno);
-        return false;
     }
     return parse_timeline(text, path, out, error);
 }

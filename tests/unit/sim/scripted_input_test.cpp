@@ -9,7 +9,8 @@ namespace {
 
 using Kind = hal::ControlEvent::Kind;
 constexpr hal::Nanos kStart = 5 * hal::kSecond;
-constexpr hal::Nanos kPeriod = 40 * hal::kMillisecond;
+constexpr double kFps = 25.0;
+constexpr hal::Nanos kPeriod = 40 * hal::kMillisecond;  // 1 / kFps
 
 Timeline parse(const std::string& text) {
     Timeline tl;
@@ -27,7 +28,7 @@ TEST(ScriptedInput, HandsOutEventsInTimeOrderAsTheClockReachesThem) {
         "t 1.0 press 1\n"     // 6.000, after frame 25 in file order
         "t 0.5 wheel -1\n");  // 5.500, after the first wheel in file order
     VirtualClock clock(kStart - 1);
-    ScriptedInput input(tl, clock, kStart, kPeriod);
+    ScriptedInput input(tl, clock, kStart, kFps);
     EXPECT_EQ(input.remaining(), 5u);
 
     hal::ControlEvent ev;
@@ -68,27 +69,31 @@ TEST(ScriptedInput, HandsOutEventsInTimeOrderAsTheClockReachesThem) {
     EXPECT_EQ(input.remaining(), 0u);
 }
 
-TEST(ScriptedInput, FrameAnchorsUseTheFramePeriod) {
-    const Timeline tl = parse("frame 3 press\nframe 1 release\n");
+TEST(ScriptedInput, FrameAnchorsFireExactlyAtTheFramesCaptureTime) {
+    // 30 fps: frame n is captured at llround(n * 1e9 / 30) (RecordedFrameSource), not
+    // at n * 33'333'333, which would put "frame 60" 20 ns before 2.0 s.
+    const Timeline tl = parse("frame 3 press\nframe 1 release\nframe 60 wheel 1\n");
     VirtualClock clock;
-    const hal::Nanos period = 33'333'333;  // 30 fps
-    ScriptedInput input(tl, clock, 100, period);
+    ScriptedInput input(tl, clock, 100, 30.0);
     hal::ControlEvent ev;
-    clock.sleep_until(100 + period);
+    clock.sleep_until(100 + 33'333'333);
     ASSERT_TRUE(input.poll(ev));
     EXPECT_EQ(ev.kind, Kind::kButtonRelease);
-    EXPECT_EQ(ev.time_ns, 100 + period);
-    clock.sleep_until(100 + 3 * period - 1);
+    EXPECT_EQ(ev.time_ns, 100 + 33'333'333);
+    clock.sleep_until(100 + 100'000'000 - 1);
     EXPECT_FALSE(input.poll(ev));
     clock.advance(1);
     ASSERT_TRUE(input.poll(ev));
     EXPECT_EQ(ev.kind, Kind::kButtonPress);
-    EXPECT_EQ(ev.time_ns, 100 + 3 * period);
+    EXPECT_EQ(ev.time_ns, 100 + 100'000'000);
+    clock.sleep_until(100 + 2 * hal::kSecond);
+    ASSERT_TRUE(input.poll(ev));
+    EXPECT_EQ(ev.time_ns, 100 + 2 * hal::kSecond);
 }
 
 TEST(ScriptedInput, EmptyTimelineNeverFires) {
     VirtualClock clock;
-    ScriptedInput input(Timeline{}, clock, 0, kPeriod);
+    ScriptedInput input(Timeline{}, clock, 0, kFps);
     clock.sleep_until(hal::kSecond * 1000);
     hal::ControlEvent ev;
     EXPECT_FALSE(input.poll(ev));
@@ -98,7 +103,7 @@ TEST(ScriptedInput, EmptyTimelineNeverFires) {
 TEST(ScriptedInput, AbsurdFrameIndexDoesNotOverflowIntoThePast) {
     const Timeline tl = parse("frame 9000000000000000000 press\nframe 1 release\n");
     VirtualClock clock;
-    ScriptedInput input(tl, clock, kStart, kPeriod);
+    ScriptedInput input(tl, clock, kStart, kFps);
     clock.sleep_until(kStart + 1000 * hal::kSecond);
     hal::ControlEvent ev;
     ASSERT_TRUE(input.poll(ev));

@@ -66,8 +66,8 @@ TEST(Timeline, ParsesEveryForm) {
 TEST(Timeline, FractionalSecondsAreExactNanoseconds) {
     Timeline tl;
     std::string error;
-    ASSERT_TRUE(parse_timeline("t 0.1 press\nt 0.000000001 press\nt 12.345678901 press\n",
-                               "x", tl, error))
+    ASSERT_TRUE(
+        parse_timeline("t 0.1 press\nt 0.000000001 press\nt 12.345678901 press\n", "x", tl, error))
         << error;
     ASSERT_EQ(tl.entries.size(), 3u);
     EXPECT_EQ(tl.entries[0].offset_ns, 100'000'000);
@@ -101,6 +101,11 @@ struct BadLine {
     std::string line;
     std::string message;  // after "events.txt:3: "
 };
+
+// Names the case by its bad line in test listings and failure messages.
+void PrintTo(const BadLine& b, std::ostream* os) {
+    *os << b.line;
+}
 
 class TimelineErrors : public ::testing::TestWithParam<BadLine> {};
 
@@ -156,8 +161,8 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(Timeline, ErrorLineCountsCrlfBlankAndCommentLines) {
     Timeline tl;
     std::string error;
-    EXPECT_FALSE(parse_timeline("\r\n# a\r\n\r\nframe 1 press\r\nframe 2 presss\r\n", "dos.txt",
-                                tl, error));
+    EXPECT_FALSE(
+        parse_timeline("\r\n# a\r\n\r\nframe 1 press\r\nframe 2 presss\r\n", "dos.txt", tl, error));
     EXPECT_EQ(error, "dos.txt:5: unknown event 'presss' (expected press, release or wheel)");
 }
 
@@ -185,8 +190,8 @@ TEST(Timeline, MissingFileNamesThePath) {
     Timeline tl;
     std::string error;
     EXPECT_FALSE(load_timeline(path, tl, error));
-    EXPECT_EQ(error, "cannot read timeline: open(" + path +
-                         "): No such file or directory (errno 2)");
+    EXPECT_EQ(error,
+              "cannot read timeline: open(" + path + "): No such file or directory (errno 2)");
 }
 
 TEST(Timeline, DirectoryIsNotATimeline) {
@@ -194,8 +199,8 @@ TEST(Timeline, DirectoryIsNotATimeline) {
     Timeline tl;
     std::string error;
     EXPECT_FALSE(load_timeline(dir.path().string(), tl, error));
-    EXPECT_EQ(error, "cannot read timeline: read(" + dir.path().string() +
-                         "): Is a directory (errno 21)");
+    EXPECT_EQ(error,
+              "cannot read timeline: read(" + dir.path().string() + "): Is a directory (errno 21)");
 }
 
 }  // namespace

@@ -27,16 +27,22 @@ public:
     void configure(const hal::FrameFormat& format) override;
     void process(AnalysisContext& ctx) override;
 
-    // Mean luma in 0..1 and the fraction of pixels at >= 250, over the sample grid.
+    // Over the sample grid, the pixels brighter than the scope's dark surround
+    // (luma > kSurround): their mean luma in 0..1 and the fraction at >= 250.
+    // Measured inside the lit field of view so the black corners do not count as
+    // low light. Both 0 for a black frame.
+    static constexpr int kSurround = 10;
     static void measure(const hal::Frame& frame, int step, double& light, double& clipped);
 
 private:
     void draw_text(OverlayCanvas& canvas, int x, int y, const char* text) const;
+    int text_width(const char* text) const;
 
     int step_;
     int scale_ = 1;  // glyph cell size multiplier for the frame height
     int cell_w_ = 0, cell_h_ = 0;
     std::vector<std::uint8_t> glyphs_;  // per printable char: cell_w * cell_h alpha
+    std::array<int, 96> advance_{};     // per printable char: pen advance in px
     bool button_down_ = false;
     std::int64_t wheel_total_ = 0;
 };

@@ -2,7 +2,7 @@
 // backend) or a directory of numbered images (png/jpg/bmp/tif, sorted by the number
 // in the name), delivered as BGR24.
 //
-// Pacing: frame i is captured at start + i * frame_period on the given clock. With a
+// Pacing: frame i is captured at start + i / fps on the given clock. With a
 // MonotonicClock that is real time; with a VirtualClock it is deterministic and as
 // fast as decoding allows. The capture timestamp is the scheduled time.
 //
@@ -47,6 +47,9 @@ public:
     int buffer_count() const override;
     const std::string& error() const override;
 
+    // The exact frame rate behind frame_period(): frame i is captured at
+    // start + llround(i * 1e9 / frame_rate()).
+    double frame_rate() const;
     // Frames the recording claims to hold (0 if unknown), and what happened so far.
     std::int64_t expected_frames() const;
     std::int64_t frames_read() const;

@@ -1,5 +1,6 @@
 // ScriptedInput: plays a Timeline as a ControlInput. Entries are resolved to times
-// once: "frame N" -> start + N * frame_period, "t S" -> start + S; then handed out in
+// once: "frame N" -> start + N / fps (RecordedFrameSource's capture time of frame N),
+// "t S" -> start + S; then handed out in
 // time order (file order for equal times) as the clock reaches them.
 #pragma once
 
@@ -16,7 +17,7 @@ class ScriptedInput final : public hal::ControlInput {
 public:
     // Borrows the clock. start_ns is the first frame's capture time.
     ScriptedInput(const Timeline& timeline, const hal::Clock& clock, hal::Nanos start_ns,
-                  hal::Nanos frame_period);
+                  double fps);
 
     bool poll(hal::ControlEvent& out) override;
     std::size_t remaining() const { return events_.size() - next_; }
