@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "sim_command.hpp"
+#include "commands.hpp"
 
 #ifndef ENDOTOWER_VERSION
 #define ENDOTOWER_VERSION "0.0.0"
@@ -12,22 +12,34 @@
 
 namespace {
 
+using namespace endotower::firmware;
+
+struct Command {
+    const char* name;
+    int (*run)(const Args&);
+    const char* summary;
+};
+
+// One line per command, in the order `--help` lists them.
+constexpr Command kCommands[] = {
+    {"sim", run_sim_command, "run on a recording, write the output video and a per-frame trace"},
+};
+
 void print_help() {
     std::printf(
         "usage: endotower COMMAND [OPTIONS]\n\n"
         "Inline endoscopy video appliance: live video at a fixed latency with tool\n"
-        "tracking and overlays.\n\n"
-        "commands:\n"
-        "  sim        run on a recording, write the output video and a per-frame trace\n\n"
-        "  --help     this text; 'endotower COMMAND --help' for a command\n"
-        "  --version  print the version\n");
+        "tracking and overlays.\n\ncommands:\n");
+    for (const Command& c : kCommands) std::printf("  %-14s %s\n", c.name, c.summary);
+    std::printf(
+        "\n  --help         this text; 'endotower COMMAND --help' for a command\n"
+        "  --version      print the version\n");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    using namespace endotower::firmware;
-    std::vector<std::string> args(argv + 1, argv + argc);
+    Args args(argv + 1, argv + argc);
     if (args.empty()) {
         print_help();
         return kExitBadInput;
@@ -42,7 +54,8 @@ int main(int argc, char** argv) {
         std::printf("endotower %s\n", ENDOTOWER_VERSION);
         return kExitOk;
     }
-    if (cmd == "sim") return run_sim_command(args);
+    for (const Command& c : kCommands)
+        if (cmd == c.name) return c.run(args);
     std::fprintf(stderr, "endotower: unknown command '%s' (see 'endotower --help')\n", cmd.c_str());
     return kExitBadInput;
 }

@@ -1,4 +1,4 @@
-#include "sim_command.hpp"
+#include "commands.hpp"
 
 #include <csignal>
 #include <cstdio>
@@ -66,6 +66,7 @@ bool check_output(const std::string& what, const std::string& path, std::string&
 
 }  // namespace
 
+namespace {
 void print_sim_help() {
     std::printf(
         "usage: endotower sim [--board FILE] [--input FILE|DIR] [--events TIMELINE]\n"
@@ -87,8 +88,9 @@ void print_sim_help() {
         "while running, 2 bad usage or input.\n",
         ENDOTOWER_DEFAULT_BOARD);
 }
+}  // namespace
 
-int run_sim_command(const std::vector<std::string>& args) {
+int run_sim_command(const Args& args) {
     SimArgs a;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& k = args[i];
