@@ -118,6 +118,7 @@ bool Pipeline::Impl::start() {
     if (cfg.analysis_wall_timeout_ns <= 0) cfg.analysis_wall_timeout_ns = 2 * hal::kSecond;
     if (cfg.analysis_virtual_cost_ns <= 0) cfg.analysis_virtual_cost_ns = period / 2;
     if (cfg.max_overlay_age <= 0) cfg.max_overlay_age = 3;
+    if (cfg.late_tolerance_ns <= 0) cfg.late_tolerance_ns = hal::kMillisecond;
     summary.latency_target_ns = cfg.latency_ns;
 
     // Frames in flight: those within the latency window, bounded by the pool less
@@ -310,7 +311,7 @@ void Pipeline::Impl::present_due(hal::Nanos horizon_ns) {
 void Pipeline::Impl::write_trace(const QueuedFrame& q, hal::Nanos presented,
                                  const OverlayChoice& o, hal::Nanos present_wall_ns) {
     const hal::Nanos latency = presented - q.frame.capture_ns;
-    const bool late = presented > q.due_ns;
+    const bool late = presented > q.due_ns + cfg.late_tolerance_ns;
     ++summary.frames_out;
     summary.late_frames += late;
     summary.passthrough_frames += o.passthrough;

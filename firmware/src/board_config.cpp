@@ -116,7 +116,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
         return false;
     if (const YAML::Node v = root["video"]) {
-        if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms"}) ||
+        if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms", "late_tolerance_ms"}) ||
+            !r.number(v, "late_tolerance_ms", "video.late_tolerance_ms", 0, 1000, c.late_tolerance_ms) ||
             !r.number(v, "latency_ms", "video.latency_ms", 0, 1000, c.latency_ms) ||
             !r.number(v, "compose_budget_ms", "video.compose_budget_ms", 0, 1000, c.compose_budget_ms))
             return false;

@@ -16,6 +16,7 @@ struct BoardConfig {
     // video
     double latency_ms = 0.0;  // 0 = one frame period
     double compose_budget_ms = 0.0;
+    double late_tolerance_ms = 0.0;  // 0 = 1 ms
 
     // analysis
     std::string stage = "status_badge";  // "status_badge" | "none"

@@ -16,6 +16,7 @@
 #include "endotower/sim/scripted_input.hpp"
 #include "endotower/sim/virtual_clock.hpp"
 #include "endotower/system/monotonic_clock.hpp"
+#include "endotower/system/syscall.hpp"
 
 #ifndef ENDOTOWER_DEFAULT_BOARD
 #define ENDOTOWER_DEFAULT_BOARD "board/sim/board.yaml"
@@ -183,6 +184,9 @@ int run_sim_command(const Args& args) {
     cfg.analysis_timeout_ns = static_cast<hal::Nanos>(board.analysis_timeout_ms * 1e6);
     cfg.analysis_virtual_cost_ns = static_cast<hal::Nanos>(board.analysis_virtual_cost_ms * 1e6);
     cfg.max_overlay_age = board.max_overlay_age;
+    cfg.late_tolerance_ns = static_cast<hal::Nanos>(board.late_tolerance_ms * 1e6);
+    // Wake at the due time, not up to 50 us after it (the default timer slack).
+    if (board.sim_realtime) system::tighten_timer_slack();
 
     app::StderrLog log;
     app::Pipeline pipeline(cfg, source, sink, *clock, &inputs, stage,

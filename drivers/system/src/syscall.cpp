@@ -1,6 +1,7 @@
 #include "endotower/system/syscall.hpp"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <cstring>
@@ -51,5 +52,7 @@ bool write_file_atomic(const std::string& path, std::string_view data, std::stri
     }
     return true;
 }
+
+void tighten_timer_slack() { ::prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL); }
 
 }  // namespace endotower::system

@@ -60,7 +60,7 @@ TEST(Board, ErrorsNameTheLineAndField) {
          "3: field 'video.latency_ms': expected a number, got 'fast'"},
         {"board: t\nvideo:\n  latency_ms: -1\n", "3: field 'video.latency_ms': must be between 0 and 1000, got -1"},
         {"board: t\nvideo:\n  latncy_ms: 3\n",
-         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms)"},
+         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms, late_tolerance_ms)"},
         {"board: t\nanalysis:\n  stage: magic\n",
          "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
         {"board: t\nsim:\n  realtime: maybe\n", "3: field 'sim.realtime': expected true or false, got 'maybe'"},

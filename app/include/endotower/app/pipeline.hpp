@@ -15,7 +15,9 @@
 //
 // Parameters (0 = default): latency (one frame period), compose_budget (4 ms),
 // analysis_timeout (4 frame periods), analysis_wall_timeout (2 s),
-// analysis_virtual_cost (half a frame period), max_overlay_age (3 frames).
+// analysis_virtual_cost (half a frame period), max_overlay_age (3 frames),
+// late_tolerance (1 ms: the wake-up jitter allowed before a frame counts as late;
+// the trace always records the exact latency).
 // Borrows everything it is given; all must outlive run().
 #pragma once
 
@@ -40,11 +42,12 @@ struct PipelineConfig {
     hal::Nanos analysis_wall_timeout_ns = 0;
     hal::Nanos analysis_virtual_cost_ns = 0;
     int max_overlay_age = 0;
+    hal::Nanos late_tolerance_ns = 0;
 };
 
 struct PipelineSummary {
     std::int64_t frames_in = 0, frames_out = 0;
-    std::int64_t late_frames = 0;         // presented after their due time
+    std::int64_t late_frames = 0;         // presented after due + late_tolerance
     std::int64_t passthrough_frames = 0;  // overlay withheld by a fault
     std::int64_t analysed_frames = 0;
     std::int64_t source_gaps = 0;         // frames the source itself dropped (sequence)

@@ -24,4 +24,8 @@ std::string errno_message(std::string_view call, std::string_view what, int err)
 // `error` says what failed.
 bool write_file_atomic(const std::string& path, std::string_view data, std::string& error);
 
+// Sets the calling thread's timer slack to 1 us (prctl PR_SET_TIMERSLACK), so that
+// absolute sleeps of the video thread wake within microseconds of their deadline.
+void tighten_timer_slack();
+
 }  // namespace endotower::system
