@@ -201,6 +201,40 @@ TEST(Replay, TruncatedRecordingStillYieldsValidOutputs) {
     EXPECT_EQ(static_cast<std::size_t>(n), recs.size());
 }
 
+TEST(Replay, SizeChangeMidStreamKeepsEveryFrameAndStartsANewSegment) {
+    const fs::path d = fresh_dir("size_change");
+    write_frames(d / "in", 12, 320, 240);
+    // Frames 12..19 at another size, numbered after the first ones.
+    const fs::path big = d / "big";
+    write_frames(big, 8, 480, 360);
+    for (int i = 0; i < 8; ++i)
+        fs::rename(big / (std::to_string(i) + ".png"), d / "in" / (std::to_string(12 + i) + ".png"));
+    const CommandResult r = run(kBoard + "--input " + (d / "in").string() + " --out " + (d / "out.mkv").string() +
+                                " --trace " + (d / "t.jsonl").string() + " --events ''");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("1 format changes"), std::string::npos) << r.output;
+    const auto recs = load(d / "t.jsonl");
+    ASSERT_EQ(recs.size(), 20u);
+    for (const auto& t : recs) {
+        EXPECT_EQ(t.format_change.has_value(), t.frame == 12) << t.frame;
+        EXPECT_EQ(t.latency_ns, 40'000'000) << t.frame;
+    }
+    EXPECT_EQ(recs[12].format_change->width, 480);
+    EXPECT_EQ(recs[12].format_change->height, 360);
+    // The file sink starts a new segment at the change: out.mkv then out.1.mkv.
+    cv::VideoCapture a((d / "out.mkv").string()), b((d / "out.1.mkv").string());
+    ASSERT_TRUE(a.isOpened());
+    ASSERT_TRUE(b.isOpened());
+    EXPECT_EQ(a.get(cv::CAP_PROP_FRAME_WIDTH), 320);
+    EXPECT_EQ(b.get(cv::CAP_PROP_FRAME_WIDTH), 480);
+    int na = 0, nb = 0;
+    cv::Mat m;
+    while (a.read(m)) ++na;
+    while (b.read(m)) ++nb;
+    EXPECT_EQ(na, 12);
+    EXPECT_EQ(nb, 8);
+}
+
 TEST(Replay, RealLaparoscopicClip) {
     const fs::path frames = fs::path(ENDOTOWER_SHARED_DATA) / "sznitman_lap" / "frames";
     if (!fs::is_directory(frames)) GTEST_SKIP() << "skipped: " << frames << " is absent";
