@@ -76,47 +76,48 @@ void JsonLine::number(double v) {
     put(std::string_view(tmp, static_cast<std::size_t>(end - tmp)));
 }
 
-JsonLine& JsonLine::begin_object() {
-    separator();
-    put('{');
+void JsonLine::open(char bracket) {
+    put(bracket);
     if (depth_ + 1 < kMaxDepth) first_[++depth_] = true;
     else overflow_ = true;
+}
+
+void JsonLine::close(char bracket) {
+    put(bracket);
+    if (depth_ > 0) --depth_;
+}
+
+JsonLine& JsonLine::begin_object() {
+    separator();
+    open('{');
     return *this;
 }
 
 JsonLine& JsonLine::begin_object(std::string_view k) {
     key(k);
-    put('{');
-    if (depth_ + 1 < kMaxDepth) first_[++depth_] = true;
-    else overflow_ = true;
+    open('{');
     return *this;
 }
 
 JsonLine& JsonLine::end_object() {
-    put('}');
-    if (depth_ > 0) --depth_;
+    close('}');
     return *this;
 }
 
 JsonLine& JsonLine::begin_array() {
     separator();
-    put('[');
-    if (depth_ + 1 < kMaxDepth) first_[++depth_] = true;
-    else overflow_ = true;
+    open('[');
     return *this;
 }
 
 JsonLine& JsonLine::begin_array(std::string_view k) {
     key(k);
-    put('[');
-    if (depth_ + 1 < kMaxDepth) first_[++depth_] = true;
-    else overflow_ = true;
+    open('[');
     return *this;
 }
 
 JsonLine& JsonLine::end_array() {
-    put(']');
-    if (depth_ > 0) --depth_;
+    close(']');
     return *this;
 }
 

@@ -52,6 +52,8 @@ private:
     void put(std::string_view s);
     void put(char c);
     void separator();
+    void open(char bracket);   // '{' or '[': one level deeper
+    void close(char bracket);
     void key(std::string_view k);
     void string(std::string_view s);
     void number(std::int64_t v);
