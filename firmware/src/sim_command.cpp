@@ -145,6 +145,12 @@ int run_sim_command(const Args& args) {
         std::fprintf(stderr, "endotower sim: %s\n", error.c_str());
         return kExitBadInput;
     }
+    if (!board.sim_output.empty()) {
+        const std::string ext = fs::path(board.sim_output).extension().string();
+        if (ext != ".mkv" && ext != ".avi" && ext != ".mp4")
+            return usage_error("cannot write video " + board.sim_output + ": unsupported extension '" + ext +
+                               "' (use .mkv, .avi or .mp4)");
+    }
     if (!check_output("output video", board.sim_output, error) ||
         !check_output("trace", board.sim_trace, error)) {
         std::fprintf(stderr, "endotower sim: %s\n", error.c_str());

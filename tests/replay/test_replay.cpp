@@ -286,6 +286,7 @@ TEST(Cli, BadInputIsNamedWithExitCode2) {
         {"sim --events " + (d / "events.txt").string() + out, (d / "events.txt").string() + ":2:"},
         {"sim --board " + (d / "board.yaml").string(), (d / "board.yaml").string() + ":3: field 'video.latency_ms'"},
         {"sim --bogus", "unknown option '--bogus'"},
+        {"sim --out " + (d / "o.mov").string(), "unsupported extension '.mov' (use .mkv, .avi or .mp4)"},
         {"sim --latency-ms x", "--latency-ms needs a number"},
         {"launch", "unknown command 'launch'"},
     };
