@@ -27,7 +27,10 @@ struct Reader {
     bool keys(const YAML::Node& map, const std::string& prefix, std::initializer_list<const char*> allowed) {
         if (!map.IsMap()) return fail(map, prefix, "expected a mapping of keys");
         for (const auto& kv : map) {
-            const std::string k = kv.first.as<std::string>();
+            // YAML allows any node as a key ("? [a, b]: c"); a board file does not.
+            if (!kv.first.IsScalar())
+                return fail(kv.first, prefix.empty() ? "(top level)" : prefix, "a key must be a plain name");
+            const std::string k = kv.first.Scalar();
             bool ok = false;
             for (const char* a : allowed) ok = ok || k == a;
             if (!ok) {

@@ -67,6 +67,8 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\nanalysis:\n  max_overlay_age: 2.5\n", "3: field 'analysis.max_overlay_age': expected an integer"},
         {"video: {latency_ms: 1}\n", "1: field 'board': missing (the board's name)"},
         {"board: t\nvideo: [1, 2\n", "3: not valid YAML: end of sequence flow not found"},
+        {"board: t\n? [a, b]\n: c\n", "2: field '(top level)': a key must be a plain name"},
+        {"board: t\nsim:\n  ? {x: 1}\n  : y\n", "3: field 'sim': a key must be a plain name"},
     };
     for (const auto& c : cases) {
         const std::string p = write_board("bad.yaml", c.text);
@@ -75,6 +77,20 @@ TEST(Board, ErrorsNameTheLineAndField) {
         EXPECT_FALSE(load_board(p, b, err)) << c.text;
         EXPECT_EQ(err, p + ":" + c.message) << c.text;
     }
+}
+
+// Inputs the fuzzer (tests/fuzz) once crashed on: each must now load or be refused
+// with a message naming the file.
+TEST(Board, FuzzRegressionsAreRefusedCleanly) {
+    const fs::path dir = fs::path(ENDOTOWER_SOURCE_DIR) / "tests/fuzz/regressions/board";
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        BoardConfig b;
+        std::string err;
+        if (!load_board(e.path().string(), b, err)) EXPECT_EQ(err.rfind(e.path().string(), 0), 0u) << err;
+        ++n;
+    }
+    EXPECT_GE(n, 1);
 }
 
 TEST(Board, MissingAndEmptyFiles) {
