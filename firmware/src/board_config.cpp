@@ -126,8 +126,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return false;
     }
     if (const YAML::Node a = root["analysis"]) {
-        if (!r.keys(a, "analysis", {"stage", "timeout_ms", "virtual_cost_ms", "max_overlay_age"}) ||
-            !r.text(a, "stage", "analysis.stage", c.stage) ||
+        if (!r.keys(a, "analysis", {"stage", "tracker", "timeout_ms", "virtual_cost_ms", "max_overlay_age"}) ||
+            !r.text(a, "stage", "analysis.stage", c.stage) || !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
             !r.number(a, "timeout_ms", "analysis.timeout_ms", 0, 60000, c.analysis_timeout_ms) ||
             !r.number(a, "virtual_cost_ms", "analysis.virtual_cost_ms", 0, 60000, c.analysis_virtual_cost_ms) ||
             !r.integer(a, "max_overlay_age", "analysis.max_overlay_age", 0, 1000, c.max_overlay_age))
@@ -135,6 +135,9 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (c.stage != "status_badge" && c.stage != "none")
             return r.fail(a["stage"], "analysis.stage",
                           "unknown stage '" + c.stage + "' (expected status_badge or none)");
+        if (c.tracker != "none" && c.tracker != "kalman" && c.tracker != "kalman_red")
+            return r.fail(a["tracker"], "analysis.tracker",
+                          "unknown tracker '" + c.tracker + "' (expected none, kalman or kalman_red)");
     }
     if (const YAML::Node s = root["sim"]) {
         if (!r.keys(s, "sim", {"input", "events", "output", "frames", "trace", "realtime", "fps"}) ||

@@ -8,6 +8,7 @@
 
 #include "board_config.hpp"
 #include "endotower/app/pipeline.hpp"
+#include "endotower/app/stage_chain.hpp"
 #include "endotower/app/status_badge.hpp"
 #include "endotower/app/trace_writer.hpp"
 #include "endotower/hal/control_merge.hpp"
@@ -17,6 +18,8 @@
 #include "endotower/sim/virtual_clock.hpp"
 #include "endotower/system/monotonic_clock.hpp"
 #include "endotower/system/syscall.hpp"
+#include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/vision/tool_tracking_stage.hpp"
 
 #ifndef ENDOTOWER_DEFAULT_BOARD
 #define ENDOTOWER_DEFAULT_BOARD "board/sim/board.yaml"
@@ -181,8 +184,14 @@ int run_sim_command(const Args& args) {
     hal::ControlMerge inputs;
     inputs.attach(&scripted);
 
+    // The analysis path: the status badge, then the tool tracker, as the board says.
     app::StatusBadge badge;
-    app::AnalysisStage* stage = board.stage == "none" ? nullptr : &badge;
+    vision::KalmanToolTracker tracker(vision::KalmanToolTrackerParams{.red_binarised = board.tracker == "kalman_red"});
+    vision::ToolTrackingStage tracking(tracker);
+    app::StageChain chain;
+    if (board.stage == "status_badge") chain.add(&badge);
+    if (board.tracker != "none") chain.add(&tracking);
+    app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 
     app::PipelineConfig cfg;
     cfg.latency_ns = static_cast<hal::Nanos>(board.latency_ms * 1e6);

@@ -63,6 +63,8 @@ TEST(Board, ErrorsNameTheLineAndField) {
          "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms, late_tolerance_ms)"},
         {"board: t\nanalysis:\n  stage: magic\n",
          "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
+        {"board: t\nanalysis:\n  tracker: cnn\n",
+         "3: field 'analysis.tracker': unknown tracker 'cnn' (expected none, kalman or kalman_red)"},
         {"board: t\nsim:\n  realtime: maybe\n", "3: field 'sim.realtime': expected true or false, got 'maybe'"},
         {"board: t\nanalysis:\n  max_overlay_age: 2.5\n", "3: field 'analysis.max_overlay_age': expected an integer"},
         {"video: {latency_ms: 1}\n", "1: field 'board': missing (the board's name)"},

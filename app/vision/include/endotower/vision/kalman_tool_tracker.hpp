@@ -1,0 +1,52 @@
+// KalmanToolTracker: the book's feature-based tracker (ch. 4): Canny + probabilistic
+// Hough on the frame reduced to `analysis_width`, the two-bin edge labelling and
+// merge (EdgePairing), the midline Kalman filter with slope/distance gating
+// (MidlineKalman), loss after a few missed frames and automatic re-initialisation
+// from the strongest edge pair, then the tip along the midline (TipExtractor).
+// Variant `red_binarised` (fig. 4.12-4.13): Canny on the red channel binarised at
+// `red_threshold` (tools are dark or grey, tissue is red) instead of grey.
+// One tool. Results are scaled back to full-resolution coordinates.
+// Parameters: analysis_width 640; canny 40/120; hough threshold 50, minimum
+// length 8 % of the analysis width, gap 10 px; plausible shaft width 6 px .. 30 %
+// of the analysis width.
+#pragma once
+
+#include <memory>
+
+#include "endotower/vision/midline_kalman.hpp"
+#include "endotower/vision/tip_extractor.hpp"
+#include "endotower/vision/tool_tracker.hpp"
+
+namespace endotower::vision {
+
+struct KalmanToolTrackerParams {
+    int analysis_width = 640;
+    bool red_binarised = false;
+    int red_threshold = 110;
+    double canny_low = 40, canny_high = 120;
+    int hough_threshold = 50;
+    double min_length_fraction = 0.08;
+    double max_gap_px = 10;
+    double min_width_px = 6;
+    double max_width_fraction = 0.3;
+    MidlineKalmanParams kalman;
+    TipExtractorParams tip;
+};
+
+class KalmanToolTracker final : public ToolTracker {
+public:
+    explicit KalmanToolTracker(KalmanToolTrackerParams params = {});
+    ~KalmanToolTracker() override;
+    std::string_view name() const override { return params_.red_binarised ? "kalman_red" : "kalman"; }
+    void configure(const hal::FrameFormat& format) override;
+    std::size_t track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) override;
+
+private:
+    struct Work;
+    KalmanToolTrackerParams params_;
+    std::unique_ptr<Work> work_;
+    MidlineKalman kalman_;
+    int next_id_ = 0, id_ = -1;
+};
+
+}  // namespace endotower::vision

@@ -1,0 +1,135 @@
+#include "endotower/vision/kalman_tool_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace endotower::vision {
+
+struct KalmanToolTracker::Work {
+    double scale = 1.0;  // analysis pixels per full-resolution pixel
+    cv::Mat small, gray, edges;
+    std::vector<cv::Vec4i> lines;
+    std::vector<Segment> segments, gated;
+};
+
+namespace {
+
+double border_distance(Point2 p, int w, int h) {
+    return std::min(std::min(p.x, p.y), std::min(w - 1 - p.x, h - 1 - p.y));
+}
+
+bool plausible(const EdgePair& p, const KalmanToolTrackerParams& k, int width) {
+    return p.found && p.width_px >= k.min_width_px && p.width_px <= k.max_width_fraction * width;
+}
+
+}  // namespace
+
+KalmanToolTracker::KalmanToolTracker(KalmanToolTrackerParams params)
+    : params_(params), work_(std::make_unique<Work>()), kalman_(params.kalman) {}
+
+KalmanToolTracker::~KalmanToolTracker() = default;
+
+void KalmanToolTracker::configure(const hal::FrameFormat& format) {
+    Work& w = *work_;
+    w.scale = std::min(1.0, static_cast<double>(params_.analysis_width) / format.width);
+    const int sw = std::max(1, static_cast<int>(std::lround(format.width * w.scale)));
+    const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
+    w.small.create(sh, sw, CV_8UC3);
+    w.gray.create(sh, sw, CV_8UC1);
+    w.edges.create(sh, sw, CV_8UC1);
+    w.lines.reserve(4096);
+    w.segments.reserve(4096);
+    w.gated.reserve(4096);
+    kalman_ = MidlineKalman(params_.kalman);
+    id_ = -1;
+}
+
+std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
+    Work& w = *work_;
+    if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty()) return 0;
+    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
+    if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
+    else full.copyTo(w.small);
+
+    if (params_.red_binarised) {
+        // Fig. 4.12-4.13: tissue is bright in red, tools are not.
+        cv::extractChannel(w.small, w.gray, 2);
+        cv::threshold(w.gray, w.gray, params_.red_threshold, 255, cv::THRESH_BINARY);
+    } else {
+        cv::cvtColor(w.small, w.gray, cv::COLOR_BGR2GRAY);
+        cv::GaussianBlur(w.gray, w.gray, cv::Size(5, 5), 1.5);
+    }
+    cv::Canny(w.gray, w.edges, params_.canny_low, params_.canny_high);
+    w.lines.clear();
+    cv::HoughLinesP(w.edges, w.lines, 1, CV_PI / 360, params_.hough_threshold,
+                    params_.min_length_fraction * w.small.cols, params_.max_gap_px);
+    w.segments.clear();
+    for (const cv::Vec4i& l : w.lines)
+        w.segments.push_back({{double(l[0]), double(l[1])}, {double(l[2]), double(l[3])}});
+    std::sort(w.segments.begin(), w.segments.end(),
+              [](const Segment& a, const Segment& b) { return a.length() > b.length(); });
+
+    EdgePair pair;
+    if (kalman_.initialised() && !kalman_.lost()) {
+        kalman_.predict();
+        w.gated.clear();
+        for (const Segment& s : w.segments)
+            if (kalman_.gate(s)) w.gated.push_back(s);
+        pair = pair_edges(w.gated);
+        if (plausible(pair, params_, w.small.cols)) kalman_.correct(pair.midline);
+        else {
+            kalman_.miss();
+            pair.found = false;
+        }
+    }
+    if (!kalman_.initialised() || kalman_.lost()) {
+        // (Re)initialise from the strongest edge pair of the frame.
+        pair = pair_edges(w.segments);
+        if (!plausible(pair, params_, w.small.cols)) return 0;
+        kalman_.init(pair.midline);
+        id_ = next_id_++;
+    }
+    if (!pair.found) return 0;
+
+    // The incision side is the midline's end nearer the image border.
+    const Point2 a = pair.midline.a, b = pair.midline.b;
+    const bool a_is_incision = border_distance(a, w.small.cols, w.small.rows) <= border_distance(b, w.small.cols, w.small.rows);
+    const Point2 incision = a_is_incision ? a : b, far = a_is_incision ? b : a;
+    const Point2 toward_tip{far.x - incision.x, far.y - incision.y};
+
+    hal::Frame small_frame;
+    small_frame.format = {w.small.cols, w.small.rows, static_cast<int>(w.small.step), hal::PixelFormat::kBgr24};
+    small_frame.data = w.small.data;
+    const TipResult tip = extract_tip(small_frame, pair, toward_tip, {}, params_.tip);
+
+    // The head: where the straight edges end on the tip side, on the midline.
+    const double tl = std::hypot(toward_tip.x, toward_tip.y);
+    const double ux = toward_tip.x / tl, uy = toward_tip.y / tl;
+    double head_t = 0;
+    for (Point2 p : {pair.e1.a, pair.e1.b, pair.e2.a, pair.e2.b})
+        head_t = std::max(head_t, (p.x - incision.x) * ux + (p.y - incision.y) * uy);
+    const Point2 head{incision.x + head_t * ux, incision.y + head_t * uy};
+    const Point2 tip_pt = tip.found ? tip.tip : head;
+
+    const double inv = 1.0 / w.scale;
+    ToolEstimate& e = out[0];
+    e.id = id_;
+    e.present = true;
+    e.tip = {tip_pt.x * inv, tip_pt.y * inv};
+    e.head = {head.x * inv, head.y * inv};
+    e.axis_deg = std::atan2(-uy, -ux) * 180.0 / M_PI;  // tip -> incision
+    e.width_px = pair.width_px * inv;
+    e.edges.found = true;
+    e.edges.e1 = {{pair.e1.a.x * inv, pair.e1.a.y * inv}, {pair.e1.b.x * inv, pair.e1.b.y * inv}};
+    e.edges.e2 = {{pair.e2.a.x * inv, pair.e2.a.y * inv}, {pair.e2.b.x * inv, pair.e2.b.y * inv}};
+    e.edges.midline = {{incision.x * inv, incision.y * inv}, {e.head.x, e.head.y}};
+    e.edges.width_px = e.width_px;
+    // Longer edges on both sides and a clear tip make a surer estimate.
+    const double cover = std::min(pair.e1.length(), pair.e2.length()) / (0.25 * w.small.cols);
+    e.confidence = std::clamp(0.25 + 0.5 * std::min(cover, 1.0) + (tip.found ? 0.25 : 0.0), 0.0, 1.0);
+    return 1;
+}
+
+}  // namespace endotower::vision
