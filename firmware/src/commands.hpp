@@ -15,5 +15,6 @@ constexpr int kExitBadInput = 2;  // usage, missing or malformed input
 using Args = std::vector<std::string>;
 
 int run_sim_command(const Args& args);
+int run_eval_command(const Args& args);
 
 }  // namespace endotower::firmware

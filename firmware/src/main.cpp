@@ -23,6 +23,7 @@ struct Command {
 // One line per command, in the order `--help` lists them.
 constexpr Command kCommands[] = {
     {"sim", run_sim_command, "run on a recording, write the output video and a per-frame trace"},
+    {"eval", run_eval_command, "score a trace against ground truth, write a report"},
 };
 
 void print_help() {

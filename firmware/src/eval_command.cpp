@@ -1,0 +1,206 @@
+// endotower eval: scores a trace against ground truth (the scene simulator's
+// truth.jsonl or the sznitman_lap annotations) and writes a report. docs/evaluation.md.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+
+#include "commands.hpp"
+#include "endotower/eval/report.hpp"
+#include "endotower/system/syscall.hpp"
+
+namespace endotower::firmware {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+void print_eval_help() {
+    std::printf(
+        "usage: endotower eval --trace FILE (--truth FILE | --sznitman XML [--first-index N])\n"
+        "                      [--report DIR] [thresholds]\n\n"
+        "Compares a trace of 'endotower sim' with ground truth: tool tracking success by the\n"
+        "book's rule (tip within 2 x tool width, axis within 20 deg), tip errors, false\n"
+        "positives, identity, per-factor rates; gesture confusion (table 3.3 layout);\n"
+        "region GOOD/OK/FAIL and corner error. See docs/evaluation.md.\n\n"
+        "  --trace FILE          the trace (JSON Lines, docs/trace.md)\n"
+        "  --truth FILE          the simulator's truth.jsonl (docs/truth.md)\n"
+        "  --sznitman XML        sznitman_lap annotations (train.xml); success when the head\n"
+        "                        is within 0.5 x SCALE and the axis within 20 deg as lines\n"
+        "  --first-index N       annotation index of trace frame 0 (default: the smallest)\n"
+        "  --report DIR          write DIR/report.md and PNG plots (atomically)\n\n"
+        "thresholds (exit status 1 when one fails; R is 0..1 or a percentage like 80%%):\n"
+        "  --min-success R  --max-tip-error PX  --max-p95-tip-error PX  --max-tip-error-mm MM\n"
+        "  --max-false-positives PER_FRAME  --min-identity R  --min-gesture-rate R\n"
+        "  --min-region-good R  --max-corner-error PX\n\n"
+        "Exit status: 0 every threshold passed, 1 a threshold failed (or the report could\n"
+        "not be written), 2 bad usage or malformed input (FILE:LINE: field message).\n");
+}
+
+int usage_error(const std::string& m) {
+    std::fprintf(stderr, "endotower eval: %s\n(see 'endotower eval --help')\n", m.c_str());
+    return kExitBadInput;
+}
+
+// A number; with `rate`, 0..1 or a percentage "80%".
+bool parse_value(std::string s, bool rate, double& out) {
+    bool percent = false;
+    if (rate && !s.empty() && s.back() == '%') {
+        percent = true;
+        s.pop_back();
+    }
+    char* end = nullptr;
+    out = std::strtod(s.c_str(), &end);
+    if (s.empty() || end == nullptr || *end != 0 || !std::isfinite(out) || out < 0) return false;
+    if (percent) out /= 100.0;
+    return !rate || out <= 1.0;
+}
+
+// Writes the files into a fresh sibling directory, then renames it over DIR, so a
+// reader never sees a half-written report (the old one is removed after the swap).
+bool write_report(const std::string& dir, const std::vector<std::pair<std::string, std::string>>& files,
+                  std::string& error) {
+    const fs::path target = fs::absolute(dir).lexically_normal();
+    std::string suffix = ".";
+    suffix += std::to_string(::getpid());  // (not "." + ...: a GCC 12 -Wrestrict false positive)
+    const fs::path tmp = target.string() + ".tmp" + suffix, old = target.string() + ".old" + suffix;
+    std::error_code ec;
+    fs::create_directories(target.parent_path(), ec);
+    fs::remove_all(tmp, ec);
+    if (!fs::create_directory(tmp, ec)) {
+        error = "cannot create " + tmp.string() + ": " + ec.message();
+        return false;
+    }
+    for (const auto& [name, data] : files)
+        if (!system::write_file_atomic((tmp / name).string(), data, error)) {
+            fs::remove_all(tmp, ec);
+            return false;
+        }
+    const bool had_old = fs::exists(target);
+    if (had_old) {
+        fs::rename(target, old, ec);
+        if (ec) {
+            error = "cannot replace " + target.string() + ": " + ec.message();
+            fs::remove_all(tmp, ec);
+            return false;
+        }
+    }
+    fs::rename(tmp, target, ec);
+    if (ec) {
+        error = "cannot rename " + tmp.string() + " to " + target.string() + ": " + ec.message();
+        if (had_old) fs::rename(old, target, ec);
+        fs::remove_all(tmp, ec);
+        return false;
+    }
+    if (had_old) fs::remove_all(old, ec);
+    return true;
+}
+
+}  // namespace
+
+int run_eval_command(const Args& args) {
+    std::string trace, truth, sznitman, report;
+    std::optional<int> first_index;
+    eval::Thresholds th;
+    struct Limit {
+        const char* flag;
+        std::optional<double> eval::Thresholds::*field;
+        bool rate;
+    };
+    const Limit limits[] = {{"--min-success", &eval::Thresholds::min_success, true},
+                            {"--max-tip-error", &eval::Thresholds::max_mean_error_px, false},
+                            {"--max-p95-tip-error", &eval::Thresholds::max_p95_error_px, false},
+                            {"--max-tip-error-mm", &eval::Thresholds::max_mean_error_mm, false},
+                            {"--max-false-positives", &eval::Thresholds::max_false_positives, false},
+                            {"--min-identity", &eval::Thresholds::min_identity, true},
+                            {"--min-gesture-rate", &eval::Thresholds::min_gesture_rate, true},
+                            {"--min-region-good", &eval::Thresholds::min_region_good, true},
+                            {"--max-corner-error", &eval::Thresholds::max_corner_error_px, false}};
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& k = args[i];
+        if (k == "--help" || k == "-h") {
+            print_eval_help();
+            return kExitOk;
+        }
+        if (i + 1 >= args.size()) return usage_error(k.rfind("--", 0) == 0 ? "option " + k + " needs a value" : "unexpected argument '" + k + "'");
+        const std::string& v = args[++i];
+        if (k == "--trace") trace = v;
+        else if (k == "--truth") truth = v;
+        else if (k == "--sznitman") sznitman = v;
+        else if (k == "--report") report = v;
+        else if (k == "--first-index") {
+            char* end = nullptr;
+            const long n = std::strtol(v.c_str(), &end, 10);
+            if (v.empty() || *end != 0 || n < 0 || n > 100000000)
+                return usage_error("--first-index needs a frame number, got '" + v + "'");
+            first_index = static_cast<int>(n);
+        } else {
+            const Limit* l = nullptr;
+            for (const Limit& c : limits)
+                if (k == c.flag) l = &c;
+            if (l == nullptr) return usage_error("unknown option '" + k + "'");
+            double x = 0;
+            if (!parse_value(v, l->rate, x))
+                return usage_error(k + (l->rate ? " needs a rate in 0..1 (or 0..100%)" : " needs a number >= 0") +
+                                   ", got '" + v + "'");
+            th.*(l->field) = x;
+        }
+    }
+    if (trace.empty()) return usage_error("give the trace with --trace FILE");
+    if (truth.empty() == sznitman.empty()) return usage_error("give exactly one of --truth FILE or --sznitman XML");
+    if (first_index && sznitman.empty()) return usage_error("--first-index goes with --sznitman");
+
+    eval::EvalResult r;
+    r.trace_path = trace;
+    std::vector<eval::AnalysisFrame> frames;
+    std::string error;
+    if (!eval::read_analysis_trace(trace, frames, error)) {
+        std::fprintf(stderr, "endotower eval: %s\n", error.c_str());
+        return kExitBadInput;
+    }
+    for (const eval::AnalysisFrame& f : frames) r.has_tools = r.has_tools || f.has_tools;
+    if (!truth.empty()) {
+        std::vector<eval::TruthFrame> gt;
+        if (!eval::read_truth(truth, gt, error)) {
+            std::fprintf(stderr, "endotower eval: %s\n", error.c_str());
+            return kExitBadInput;
+        }
+        r.truth_path = truth;
+        r.tools = eval::score_tools(gt, frames);
+        r.gestures = eval::score_gestures(gt, frames);
+        r.regions = eval::score_regions(gt, frames);
+    } else {
+        eval::SznitmanAnnotations ann;
+        if (!eval::read_sznitman(sznitman, ann, error)) {
+            std::fprintf(stderr, "endotower eval: %s\n", error.c_str());
+            return kExitBadInput;
+        }
+        int first = first_index.value_or(0);
+        if (!first_index && !ann.frames.empty()) {
+            first = ann.frames.front().index;
+            for (const eval::SznitmanFrame& f : ann.frames) first = std::min(first, f.index);
+        }
+        r.sznitman = true;
+        r.truth_path = sznitman;
+        r.tools = eval::score_sznitman(ann, frames, first);
+    }
+    const std::vector<eval::ThresholdCheck> checks = eval::check_thresholds(r, th);
+    std::fputs(eval::render_summary(r, checks).c_str(), stdout);
+    if (!report.empty()) {
+        std::vector<std::pair<std::string, std::string>> files = eval::render_plots(r);
+        files.emplace_back("report.md", eval::render_markdown(r, checks));
+        if (!write_report(report, files, error)) {
+            std::fprintf(stderr, "endotower eval: cannot write the report: %s\n", error.c_str());
+            return kExitFailure;
+        }
+        std::printf("report: %s/report.md\n", report.c_str());
+    }
+    for (const eval::ThresholdCheck& c : checks)
+        if (!c.pass) return kExitFailure;
+    return kExitOk;
+}
+
+}  // namespace endotower::firmware
