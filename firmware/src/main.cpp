@@ -24,6 +24,7 @@ struct Command {
 constexpr Command kCommands[] = {
     {"sim", run_sim_command, "run on a recording, write the output video and a per-frame trace"},
     {"eval", run_eval_command, "score a trace against ground truth, write a report"},
+    {"scene", run_scene_command, "render a scenario: frames with exact ground truth"},
 };
 
 void print_help() {
