@@ -9,7 +9,7 @@ namespace endotower::vision {
 
 struct KalmanToolTracker::Work {
     double scale = 1.0;  // analysis pixels per full-resolution pixel
-    cv::Mat small, gray, edges;
+    cv::Mat small, gray, edges, lit, kernel;
     std::vector<cv::Vec4i> lines;
     std::vector<Segment> segments, gated;
 };
@@ -39,6 +39,8 @@ void KalmanToolTracker::configure(const hal::FrameFormat& format) {
     w.small.create(sh, sw, CV_8UC3);
     w.gray.create(sh, sw, CV_8UC1);
     w.edges.create(sh, sw, CV_8UC1);
+    w.lit.create(sh, sw, CV_8UC1);
+    w.kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * params_.surround_margin_px + 1, 2 * params_.surround_margin_px + 1));
     w.lines.reserve(4096);
     w.segments.reserve(4096);
     w.gated.reserve(4096);
@@ -62,6 +64,14 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
         cv::GaussianBlur(w.gray, w.gray, cv::Size(5, 5), 1.5);
     }
     cv::Canny(w.gray, w.edges, params_.canny_low, params_.canny_high);
+    if (params_.surround_margin_px > 0) {
+        // Nothing outside the scope's lit circle: its rim is the strongest edge of
+        // the picture and no tool edge.
+        cv::cvtColor(w.small, w.lit, cv::COLOR_BGR2GRAY);
+        cv::threshold(w.lit, w.lit, params_.surround_level, 255, cv::THRESH_BINARY);
+        cv::erode(w.lit, w.lit, w.kernel);
+        cv::bitwise_and(w.edges, w.lit, w.edges);
+    }
     w.lines.clear();
     cv::HoughLinesP(w.edges, w.lines, 1, CV_PI / 360, params_.hough_threshold,
                     params_.min_length_fraction * w.small.cols, params_.max_gap_px);
@@ -102,7 +112,18 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
     hal::Frame small_frame;
     small_frame.format = {w.small.cols, w.small.rows, static_cast<int>(w.small.step), hal::PixelFormat::kBgr24};
     small_frame.data = w.small.data;
-    const TipResult tip = extract_tip(small_frame, pair, toward_tip, {}, params_.tip);
+    // The field of view as the lit area's equivalent circle (the calibration's
+    // circle takes its place once a calibrated scope is configured).
+    FieldOfView fov;
+    if (params_.surround_margin_px > 0) {
+        const cv::Moments m = cv::moments(w.lit, true);
+        if (m.m00 > 0) fov = {m.m10 / m.m00, m.m01 / m.m00, std::sqrt(m.m00 / M_PI) + params_.surround_margin_px};
+    }
+    // Jaws are a few shaft diameters long: the tip is not farther than that beyond
+    // the end of the straight edges.
+    TipExtractorParams tip_params = params_.tip;
+    if (tip_params.search_length_px <= 0) tip_params.search_length_px = params_.jaw_length_widths * pair.width_px;
+    const TipResult tip = extract_tip(small_frame, pair, toward_tip, fov, tip_params);
 
     // The head: where the straight edges end on the tip side, on the midline.
     const double tl = std::hypot(toward_tip.x, toward_tip.y);

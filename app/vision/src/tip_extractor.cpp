@@ -10,17 +10,21 @@ namespace {
 
 constexpr int kMaxSamples = 4096;
 
-// HSV value (max of B, G, R) of the mean of the pixels across the line at (x, y).
-int sample_value(const hal::Frame& f, double x, double y, double nx, double ny, int halfwidth) {
-    int sum = 0, n = 0;
+// HSV value (max of B, G, R) and saturation (255 (max - min) / max) of the pixels
+// across the line at (x, y), averaged.
+int sample_value(const hal::Frame& f, double x, double y, double nx, double ny, int halfwidth, int* sat) {
+    int sum = 0, ssum = 0, n = 0;
     for (int k = -halfwidth; k <= halfwidth; ++k) {
         const int px = static_cast<int>(std::lround(x + k * nx));
         const int py = static_cast<int>(std::lround(y + k * ny));
         if (px < 0 || py < 0 || px >= f.format.width || py >= f.format.height) continue;
         const std::uint8_t* p = f.data + static_cast<std::ptrdiff_t>(py) * f.format.stride + 3 * px;
-        sum += std::max({p[0], p[1], p[2]});
+        const int hi = std::max({p[0], p[1], p[2]}), lo = std::min({p[0], p[1], p[2]});
+        sum += hi;
+        ssum += hi > 0 ? 255 * (hi - lo) / hi : 0;
         ++n;
     }
+    *sat = n > 0 ? ssum / n : 0;
     return n > 0 ? sum / n : -1;
 }
 
@@ -74,26 +78,35 @@ TipResult extract_tip(const hal::Frame& f, const EdgePair& edges, Point2 toward_
     // Back off a little so the head's own edge transition is inside the profile.
     start = std::max(0.0, start - 20.0);
 
-    std::array<int, kMaxSamples> v{};
+    std::array<int, kMaxSamples> v{}, sat{};
     std::array<Point2, kMaxSamples> at{};
     int n = 0;
     for (double t = start; t <= stop && n < kMaxSamples; t += step) {
         const double x = edges.midline.a.x + t * mx, y = edges.midline.a.y + t * my;
         if (!in_view(f, fov, x, y, params.border_margin_px)) break;  // filter 3
         at[static_cast<std::size_t>(n)] = {x, y};
-        v[static_cast<std::size_t>(n)] = sample_value(f, x, y, nx, ny, params.profile_halfwidth);
+        v[static_cast<std::size_t>(n)] = sample_value(f, x, y, nx, ny, params.profile_halfwidth, &sat[static_cast<std::size_t>(n)]);
         ++n;
     }
-    // The largest change between neighbours two samples apart (robust to one-pixel
-    // anti-aliasing), over non-specular samples only (filter 1).
+    // Changes between neighbours two samples apart (robust to one-pixel
+    // anti-aliasing), over non-specular samples only (filter 1). The book takes the
+    // largest; a tool's jaws often differ from its shaft more than from the tissue,
+    // so with `last_strong_change` the farthest change of at least half the largest
+    // is taken: the end of the tool, not the joint of shaft and jaws.
     int best = 0;
-    for (int i = 0; i + 2 < n; ++i) {
-        const int a = v[static_cast<std::size_t>(i)], b = v[static_cast<std::size_t>(i + 2)];
-        if (a >= params.specular_value || b >= params.specular_value || a < 0 || b < 0) continue;
-        const int c = std::abs(b - a);
-        if (c > best) {
-            best = c;
-            r.tip = at[static_cast<std::size_t>(i + 1)];
+    for (int pass = 0; pass < (params.last_strong_change ? 2 : 1); ++pass) {
+        const int floor = pass == 0 ? 0 : std::max(params.min_contrast, best / 2);
+        for (int i = 0; i + 2 < n; ++i) {
+            const int a = v[static_cast<std::size_t>(i)], b = v[static_cast<std::size_t>(i + 2)];
+            if (a >= params.specular_value || b >= params.specular_value || a < 0 || b < 0) continue;
+            // Grey metal against red tissue differs in saturation more than in value.
+            const int c = std::max(std::abs(b - a), params.use_saturation
+                                                        ? std::abs(sat[static_cast<std::size_t>(i + 2)] - sat[static_cast<std::size_t>(i)])
+                                                        : 0);
+            if (pass == 0 ? c > best : c >= floor) {
+                if (pass == 0) best = c;
+                r.tip = at[static_cast<std::size_t>(i + 1)];
+            }
         }
     }
     r.contrast = best;

@@ -5,6 +5,8 @@
 // from the strongest edge pair, then the tip along the midline (TipExtractor).
 // Variant `red_binarised` (fig. 4.12-4.13): Canny on the red channel binarised at
 // `red_threshold` (tools are dark or grey, tissue is red) instead of grey.
+// Edges within `surround_margin_px` (8) of the dark surround (grey <= `surround_level`,
+// 20) are dropped: the field-of-view rim is never a tool edge.
 // One tool. Results are scaled back to full-resolution coordinates.
 // Parameters: analysis_width 640; canny 40/120; hough threshold 50, minimum
 // length 8 % of the analysis width, gap 10 px; plausible shaft width 6 px .. 30 %
@@ -29,8 +31,11 @@ struct KalmanToolTrackerParams {
     double max_gap_px = 10;
     double min_width_px = 6;
     double max_width_fraction = 0.3;
+    int surround_level = 20;
+    int surround_margin_px = 8;
+    double jaw_length_widths = 4.0;  // tip search beyond the edges' end, in shaft widths
     MidlineKalmanParams kalman;
-    TipExtractorParams tip;
+    TipExtractorParams tip{.last_strong_change = true, .use_saturation = true};
 };
 
 class KalmanToolTracker final : public ToolTracker {

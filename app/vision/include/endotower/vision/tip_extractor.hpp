@@ -30,6 +30,8 @@ struct TipExtractorParams {
     int profile_halfwidth = 1;
     int min_contrast = 25;
     double search_length_px = 0;  // 0: up to the border
+    bool last_strong_change = false;  // false: the book's largest change
+    bool use_saturation = false;      // also count changes of HSV saturation
 };
 
 struct TipResult {
