@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <span>
 #include <vector>
 
 namespace endotower::vision {
@@ -12,6 +13,7 @@ struct KalmanToolTracker::Work {
     cv::Mat small, gray, edges, lit, kernel;
     std::vector<cv::Vec4i> lines;
     std::vector<Segment> segments, gated;
+    std::vector<char> used;  // segment already explains a tracked tool
 };
 
 namespace {
@@ -27,7 +29,9 @@ bool plausible(const EdgePair& p, const KalmanToolTrackerParams& k, int width) {
 }  // namespace
 
 KalmanToolTracker::KalmanToolTracker(KalmanToolTrackerParams params)
-    : params_(params), work_(std::make_unique<Work>()), kalman_(params.kalman) {}
+    : params_(params), work_(std::make_unique<Work>()) {
+    for (Track& t : tracks_) t.kalman = MidlineKalman(params_.kalman);
+}
 
 KalmanToolTracker::~KalmanToolTracker() = default;
 
@@ -44,8 +48,8 @@ void KalmanToolTracker::configure(const hal::FrameFormat& format) {
     w.lines.reserve(4096);
     w.segments.reserve(4096);
     w.gated.reserve(4096);
-    kalman_ = MidlineKalman(params_.kalman);
-    id_ = -1;
+    w.used.reserve(4096);
+    for (Track& t : tracks_) t = Track{MidlineKalman(params_.kalman), -1};
 }
 
 std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
@@ -81,28 +85,51 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
     std::sort(w.segments.begin(), w.segments.end(),
               [](const Segment& a, const Segment& b) { return a.length() > b.length(); });
 
-    EdgePair pair;
-    if (kalman_.initialised() && !kalman_.lost()) {
-        kalman_.predict();
+    // Fig. 4.22: one filter per tool. Active filters take their gated segments
+    // first; a free filter starts on the strongest pair among what is left.
+    w.used.assign(w.segments.size(), 0);
+    std::size_t n = 0;
+    const std::span<Track> tracks(tracks_.data(), std::min(params_.max_tools, tracks_.size()));
+    for (Track& t : tracks) {
+        if (!t.kalman.initialised() || t.kalman.lost()) continue;
+        t.kalman.predict();
         w.gated.clear();
-        for (const Segment& s : w.segments)
-            if (kalman_.gate(s)) w.gated.push_back(s);
-        pair = pair_edges(w.gated);
-        if (plausible(pair, params_, w.small.cols)) kalman_.correct(pair.midline);
-        else {
-            kalman_.miss();
-            pair.found = false;
+        for (std::size_t i = 0; i < w.segments.size(); ++i)
+            if (!w.used[i] && t.kalman.gate(w.segments[i])) w.gated.push_back(w.segments[i]);
+        const EdgePair pair = pair_edges(w.gated);
+        if (!plausible(pair, params_, w.small.cols)) {
+            t.kalman.miss();
+            continue;
         }
+        t.kalman.correct(pair.midline);
+        mark_used(pair);
+        if (n < out.size()) describe(pair, t.id, out[n++]);
     }
-    if (!kalman_.initialised() || kalman_.lost()) {
-        // (Re)initialise from the strongest edge pair of the frame.
-        pair = pair_edges(w.segments);
-        if (!plausible(pair, params_, w.small.cols)) return 0;
-        kalman_.init(pair.midline);
-        id_ = next_id_++;
+    for (Track& t : tracks) {
+        if (t.kalman.initialised() && !t.kalman.lost()) continue;
+        w.gated.clear();
+        for (std::size_t i = 0; i < w.segments.size(); ++i)
+            if (!w.used[i]) w.gated.push_back(w.segments[i]);
+        const EdgePair pair = pair_edges(w.gated);
+        if (!plausible(pair, params_, w.small.cols)) break;  // nothing left for later slots either
+        t.kalman.init(pair.midline);
+        t.id = next_id_++;
+        mark_used(pair);
+        if (n < out.size()) describe(pair, t.id, out[n++]);
     }
-    if (!pair.found) return 0;
+    return n;
+}
 
+void KalmanToolTracker::mark_used(const EdgePair& pair) {
+    Work& w = *work_;
+    for (std::size_t i = 0; i < w.segments.size(); ++i)
+        if (max_end_distance(w.segments[i], pair.e1) <= params_.used_distance_px ||
+            max_end_distance(w.segments[i], pair.e2) <= params_.used_distance_px)
+            w.used[i] = 1;
+}
+
+void KalmanToolTracker::describe(const EdgePair& pair, int id, ToolEstimate& e) {
+    Work& w = *work_;
     // The incision side is the midline's end nearer the image border.
     const Point2 a = pair.midline.a, b = pair.midline.b;
     const bool a_is_incision = border_distance(a, w.small.cols, w.small.rows) <= border_distance(b, w.small.cols, w.small.rows);
@@ -135,8 +162,7 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
     const Point2 tip_pt = tip.found ? tip.tip : head;
 
     const double inv = 1.0 / w.scale;
-    ToolEstimate& e = out[0];
-    e.id = id_;
+    e.id = id;
     e.present = true;
     e.tip = {tip_pt.x * inv, tip_pt.y * inv};
     e.head = {head.x * inv, head.y * inv};
@@ -150,7 +176,6 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
     // Longer edges on both sides and a clear tip make a surer estimate.
     const double cover = std::min(pair.e1.length(), pair.e2.length()) / (0.25 * w.small.cols);
     e.confidence = std::clamp(0.25 + 0.5 * std::min(cover, 1.0) + (tip.found ? 0.25 : 0.0), 0.0, 1.0);
-    return 1;
 }
 
 }  // namespace endotower::vision

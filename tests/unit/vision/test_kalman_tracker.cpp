@@ -73,6 +73,51 @@ TEST(KalmanToolTracker, FollowsAMovingShaftWithOneIdentity) {
     EXPECT_LT(worst_axis, 3.0);
 }
 
+// Two shafts from the left and right borders whose tips cross paths: each keeps its
+// filter and its id (fig. 4.22, 4.27).
+TEST(KalmanToolTracker, TwoToolsKeepTheirIdentitiesThroughACrossing) {
+    KalmanToolTracker tracker;
+    const int w = 960, h = 540;
+    hal::FrameFormat fmt{w, h, w * 3, hal::PixelFormat::kBgr24};
+    tracker.configure(fmt);
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    std::array<int, 2> id_of{-1, -1};  // tracker id per true tool
+    int both = 0, consistent = 0;
+    for (int t = 0; t < 30; ++t) {
+        cv::Mat img(h, w, CV_8UC3);
+        cv::randn(img, cv::Scalar(85, 75, 185), cv::Scalar(7, 7, 7));
+        // Tool 0 enters at the left, tool 1 at the right; their tips sweep past
+        // each other horizontally while the shafts stay 50+ degrees apart.
+        const Point2 entry[2] = {{-30.0, 380.0}, {w + 30.0, 380.0}};
+        const Point2 tip[2] = {{380.0 + 8 * t, 170.0}, {580.0 - 8 * t, 230.0}};
+        for (int k = 0; k < 2; ++k)
+            cv::line(img, cv::Point2d(entry[k].x, entry[k].y), cv::Point2d(tip[k].x, tip[k].y),
+                     cv::Scalar(50, 48, 52), 30, cv::LINE_AA);
+        hal::Frame f;
+        f.format = fmt;
+        f.data = img.data;
+        const std::size_t n = tracker.track(f, out);
+        if (n < 2) continue;
+        ++both;
+        // Which truth tool is each estimate? The one whose shaft direction matches.
+        bool ok = true;
+        for (std::size_t i = 0; i < n; ++i) {
+            const double dir0 = std::atan2(entry[0].y - tip[0].y, entry[0].x - tip[0].x) * 180 / M_PI;
+            const double dir1 = std::atan2(entry[1].y - tip[1].y, entry[1].x - tip[1].x) * 180 / M_PI;
+            const int k = std::abs(std::remainder(out[i].axis_deg - dir0, 360.0)) <
+                                  std::abs(std::remainder(out[i].axis_deg - dir1, 360.0))
+                              ? 0
+                              : 1;
+            if (id_of[static_cast<std::size_t>(k)] < 0) id_of[static_cast<std::size_t>(k)] = out[i].id;
+            ok = ok && id_of[static_cast<std::size_t>(k)] == out[i].id;
+        }
+        consistent += ok;
+    }
+    EXPECT_GE(both, 27) << "both tools found in most frames";
+    EXPECT_EQ(consistent, both) << "identities swapped";
+    EXPECT_NE(id_of[0], id_of[1]);
+}
+
 TEST(KalmanToolTracker, ReportsNoToolOnTissueAlone) {
     KalmanToolTracker tracker;
     hal::FrameFormat fmt{640, 480, 640 * 3, hal::PixelFormat::kBgr24};

@@ -7,12 +7,16 @@
 // `red_threshold` (tools are dark or grey, tissue is red) instead of grey.
 // Edges within `surround_margin_px` (8) of the dark surround (grey <= `surround_level`,
 // 20) are dropped: the field-of-view rim is never a tool edge.
-// One tool. Results are scaled back to full-resolution coordinates.
+// Up to `max_tools` (2) tools, one filter each (fig. 4.22): tracked filters take the
+// segments their gates accept first, so a second tool keeps its own filter and id;
+// a free filter starts on the strongest pair of what is left. Results are scaled
+// back to full-resolution coordinates.
 // Parameters: analysis_width 640; canny 40/120; hough threshold 50, minimum
 // length 8 % of the analysis width, gap 10 px; plausible shaft width 6 px .. 30 %
 // of the analysis width.
 #pragma once
 
+#include <array>
 #include <memory>
 
 #include "endotower/vision/midline_kalman.hpp"
@@ -34,6 +38,8 @@ struct KalmanToolTrackerParams {
     int surround_level = 20;
     int surround_margin_px = 8;
     double jaw_length_widths = 4.0;  // tip search beyond the edges' end, in shaft widths
+    double used_distance_px = 6.0;   // segments this close to a tracked tool's edges are its own
+    std::size_t max_tools = 2;
     MidlineKalmanParams kalman;
     TipExtractorParams tip{.last_strong_change = true, .use_saturation = true};
 };
@@ -48,10 +54,17 @@ public:
 
 private:
     struct Work;
+    struct Track {
+        MidlineKalman kalman;
+        int id = -1;
+    };
+    void mark_used(const EdgePair& pair);
+    void describe(const EdgePair& pair, int id, ToolEstimate& out);
+
     KalmanToolTrackerParams params_;
     std::unique_ptr<Work> work_;
-    MidlineKalman kalman_;
-    int next_id_ = 0, id_ = -1;
+    std::array<Track, kMaxTools> tracks_{};
+    int next_id_ = 0;
 };
 
 }  // namespace endotower::vision
