@@ -5,8 +5,10 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  libopencv-dev
+  libopencv-dev libopencv-contrib-dev libeigen3-dev
   libyaml-cpp-dev nlohmann-json3-dev
+  libgpiod-dev libhidapi-dev libusb-1.0-0-dev
+  libdrm-dev libgbm-dev libegl-dev libgles-dev libegl-mesa0
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 
