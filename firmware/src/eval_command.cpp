@@ -6,9 +6,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <algorithm>
 #include <optional>
 
 #include "commands.hpp"
+#include "endotower/eval/derived_truth.hpp"
 #include "endotower/eval/report.hpp"
 #include "endotower/system/syscall.hpp"
 
@@ -20,8 +22,9 @@ namespace fs = std::filesystem;
 
 void print_eval_help() {
     std::printf(
-        "usage: endotower eval --trace FILE (--truth FILE | --sznitman XML [--first-index N])\n"
-        "                      [--report DIR] [thresholds]\n\n"
+        "usage: endotower eval --trace FILE (--truth FILE | --sznitman XML [--first-index N] |\n"
+        "                      --mask [FRAME:]PNG ... | --homography FILE [--homography-maps DIR]\n"
+        "                      [--region POLYGON]) [--report DIR] [thresholds]\n\n"
         "Compares a trace of 'endotower sim' with ground truth: tool tracking success by the\n"
         "book's rule (tip within 2 x tool width, axis within 20 deg), tip errors, false\n"
         "positives, identity, per-factor rates; gesture confusion (table 3.3 layout);\n"
@@ -31,6 +34,16 @@ void print_eval_help() {
         "  --sznitman XML        sznitman_lap annotations (train.xml); success when the head\n"
         "                        is within 0.5 x SCALE and the axis within 20 deg as lines\n"
         "  --first-index N       annotation index of trace frame 0 (default: the smallest)\n"
+        "  --mask [FRAME:]PNG    a binary tool mask of trace frame FRAME (default 0), one\n"
+        "                        instrument per component; repeat for more masks or frames.\n"
+        "                        Tip = the component's end away from the image border, book rule\n"
+        "  --homography FILE     H between the trace's first and last frame (FileStorage or\n"
+        "                        9 numbers); the region marked at the first frame, mapped by H,\n"
+        "                        is the truth at the last\n"
+        "  --homography-maps D   first-to-last (default) or last-to-first (homography_pairs'\n"
+        "                        *_model.txt map image B to A: last-to-first)\n"
+        "  --region POLYGON      the marked region \"x1,y1 x2,y2 x3,y3 ...\" (first frame's px);\n"
+        "                        default: the regions the trace reports at its first frame\n"
         "  --report DIR          write DIR/report.md and PNG plots (atomically)\n\n"
         "thresholds (exit status 1 when one fails; R is 0..1 or a percentage like 80%%):\n"
         "  --min-success R  --max-tip-error PX  --max-p95-tip-error PX  --max-tip-error-mm MM\n"
@@ -102,7 +115,8 @@ bool write_report(const std::string& dir, const std::vector<std::pair<std::strin
 }  // namespace
 
 int run_eval_command(const Args& args) {
-    std::string trace, truth, sznitman, report;
+    std::string trace, truth, sznitman, report, homography, maps = "first-to-last", region;
+    std::vector<std::pair<std::int64_t, std::string>> masks;
     std::optional<int> first_index;
     eval::Thresholds th;
     struct Limit {
@@ -131,6 +145,20 @@ int run_eval_command(const Args& args) {
         else if (k == "--truth") truth = v;
         else if (k == "--sznitman") sznitman = v;
         else if (k == "--report") report = v;
+        else if (k == "--homography") homography = v;
+        else if (k == "--homography-maps") maps = v;
+        else if (k == "--region") region = v;
+        else if (k == "--mask") {
+            std::int64_t frame = 0;
+            std::string file = v;
+            const std::size_t colon = v.find(':');
+            if (colon != std::string::npos && colon > 0 &&
+                v.find_first_not_of("0123456789") == colon) {
+                frame = std::strtoll(v.substr(0, colon).c_str(), nullptr, 10);
+                file = v.substr(colon + 1);
+            }
+            masks.emplace_back(frame, file);
+        }
         else if (k == "--first-index") {
             char* end = nullptr;
             const long n = std::strtol(v.c_str(), &end, 10);
@@ -150,8 +178,14 @@ int run_eval_command(const Args& args) {
         }
     }
     if (trace.empty()) return usage_error("give the trace with --trace FILE");
-    if (truth.empty() == sznitman.empty()) return usage_error("give exactly one of --truth FILE or --sznitman XML");
+    const int modes = !truth.empty() + !sznitman.empty() + !masks.empty() + !homography.empty();
+    if (modes != 1)
+        return usage_error("give exactly one kind of ground truth: --truth FILE, --sznitman XML, --mask PNG or "
+                           "--homography FILE");
     if (first_index && sznitman.empty()) return usage_error("--first-index goes with --sznitman");
+    if (maps != "first-to-last" && maps != "last-to-first")
+        return usage_error("--homography-maps is first-to-last or last-to-first, got '" + maps + "'");
+    if (!region.empty() && homography.empty()) return usage_error("--region goes with --homography");
 
     eval::EvalResult r;
     r.trace_path = trace;
@@ -171,6 +205,70 @@ int run_eval_command(const Args& args) {
         r.truth_path = truth;
         r.tools = eval::score_tools(gt, frames);
         r.gestures = eval::score_gestures(gt, frames);
+        r.regions = eval::score_regions(gt, frames);
+    } else if (!masks.empty()) {
+        std::vector<eval::TruthFrame> gt;
+        for (const auto& [frame, file] : masks) {
+            eval::ToolMask mask;
+            if (!eval::read_tool_mask(file, mask, error)) {
+                std::fprintf(stderr, "endotower eval: %s\n", error.c_str());
+                return kExitBadInput;
+            }
+            auto it = std::find_if(gt.begin(), gt.end(), [&](const eval::TruthFrame& f) { return f.frame == frame; });
+            if (it == gt.end()) {
+                gt.emplace_back();
+                gt.back().frame = frame;
+                it = gt.end() - 1;
+            }
+            for (eval::TruthTool t : eval::tools_from_mask(mask)) {
+                t.id = static_cast<int>(it->tools.size()) + 1;
+                it->tools.push_back(t);
+            }
+        }
+        std::sort(gt.begin(), gt.end(), [](const eval::TruthFrame& a, const eval::TruthFrame& b) { return a.frame < b.frame; });
+        // Only the masked frames are scored.
+        std::vector<eval::AnalysisFrame> masked;
+        for (const eval::AnalysisFrame& f : frames)
+            for (const eval::TruthFrame& g : gt)
+                if (g.frame == f.frame) masked.push_back(f);
+        r.truth_path = masks.front().second + (masks.size() > 1 ? " (+" + std::to_string(masks.size() - 1) + " masks)" : "");
+        r.tools = eval::score_tools(gt, masked);
+    } else if (!homography.empty()) {
+        eval::Homography h;
+        if (!eval::read_homography(homography, h, error)) {
+            std::fprintf(stderr, "endotower eval: %s\n", error.c_str());
+            return kExitBadInput;
+        }
+        if (maps == "last-to-first") {
+            eval::Homography inv;
+            eval::invert_homography(h, inv);
+            h = inv;
+        }
+        if (frames.empty()) {
+            std::fprintf(stderr, "endotower eval: %s: the trace has no frames\n", trace.c_str());
+            return kExitBadInput;
+        }
+        std::vector<std::vector<eval::Point2>> polys;
+        std::int64_t first = frames.front().frame;
+        if (!region.empty()) {
+            polys.emplace_back();
+            if (!eval::parse_polygon(region, polys.back(), error)) return usage_error("--region: " + error);
+        } else {
+            polys = eval::first_trace_polygons(frames, first);
+            if (polys.empty()) {
+                std::fprintf(stderr, "endotower eval: %s: no frame has a 'regions' member; mark the region "
+                             "with --region\n", trace.c_str());
+                return kExitBadInput;
+            }
+        }
+        std::vector<eval::TruthFrame> gt;
+        if (!eval::region_truth_from_homography(polys, h, first, frames.back().frame, gt, error)) {
+            std::fprintf(stderr, "endotower eval: %s: %s\n", homography.c_str(), error.c_str());
+            return kExitBadInput;
+        }
+        // Polygons read from the trace's first frame match it by construction: score the last only.
+        if (region.empty() && gt.size() == 2) gt.erase(gt.begin());
+        r.truth_path = homography;
         r.regions = eval::score_regions(gt, frames);
     } else {
         eval::SznitmanAnnotations ann;
