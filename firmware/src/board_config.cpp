@@ -126,8 +126,9 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return false;
     }
     if (const YAML::Node a = root["analysis"]) {
-        if (!r.keys(a, "analysis", {"stage", "tracker", "timeout_ms", "virtual_cost_ms", "max_overlay_age"}) ||
+        if (!r.keys(a, "analysis", {"stage", "tracker", "tool_model", "timeout_ms", "virtual_cost_ms", "max_overlay_age"}) ||
             !r.text(a, "stage", "analysis.stage", c.stage) || !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
+            !r.text(a, "tool_model", "analysis.tool_model", c.tool_model) ||
             !r.number(a, "timeout_ms", "analysis.timeout_ms", 0, 60000, c.analysis_timeout_ms) ||
             !r.number(a, "virtual_cost_ms", "analysis.virtual_cost_ms", 0, 60000, c.analysis_virtual_cost_ms) ||
             !r.integer(a, "max_overlay_age", "analysis.max_overlay_age", 0, 1000, c.max_overlay_age))
@@ -135,9 +136,12 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (c.stage != "status_badge" && c.stage != "none")
             return r.fail(a["stage"], "analysis.stage",
                           "unknown stage '" + c.stage + "' (expected status_badge or none)");
-        if (c.tracker != "none" && c.tracker != "kalman" && c.tracker != "kalman_red")
+        if (c.tracker != "none" && c.tracker != "kalman" && c.tracker != "kalman_red" && c.tracker != "likelihood")
             return r.fail(a["tracker"], "analysis.tracker",
-                          "unknown tracker '" + c.tracker + "' (expected none, kalman or kalman_red)");
+                          "unknown tracker '" + c.tracker + "' (expected none, kalman, kalman_red or likelihood)");
+        if (c.tracker == "likelihood" && c.tool_model.empty())
+            return r.fail(a["tracker"], "analysis.tracker",
+                          "the likelihood tracker needs analysis.tool_model (a file of 'endotower train-tool-model')");
     }
     if (const YAML::Node s = root["sim"]) {
         if (!r.keys(s, "sim", {"input", "events", "output", "frames", "trace", "realtime", "fps"}) ||
@@ -149,7 +153,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return false;
     }
     const fs::path base = fs::path(path).parent_path();
-    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace})
+    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model})
         *p = resolve(base, *p);
     out = std::move(c);
     return true;

@@ -20,7 +20,8 @@ struct BoardConfig {
 
     // analysis
     std::string stage = "status_badge";  // "status_badge" | "none"
-    std::string tracker = "none";        // "none" | "kalman" | "kalman_red"
+    std::string tracker = "none";        // "none" | "kalman" | "kalman_red" | "likelihood"
+    std::string tool_model;              // the likelihood tracker's model file
     double analysis_timeout_ms = 0.0;
     double analysis_virtual_cost_ms = 0.0;
     int max_overlay_age = 0;

@@ -14,7 +14,7 @@ namespace {
 void print_scene_help() {
     std::printf(
         "usage: endotower scene --scenario FILE --out DIR [--seed N] [--frames N]\n"
-        "                       [--size 640x480|1920x1080] [--scale K]\n\n"
+        "                       [--size 640x480|1920x1080] [--scale K] [--labels]\n\n"
         "Renders a synthetic laparoscopic recording with exact ground truth:\n"
         "DIR/frames/000000.png ... (input for 'endotower sim --input DIR/frames'),\n"
         "DIR/truth.jsonl (one line per frame, docs/truth.md) and DIR/scenario.yaml.\n"
@@ -25,7 +25,9 @@ void print_scene_help() {
         "  --seed N         random seed (default: the scenario's seed)\n"
         "  --frames N       frame count (default: the scenario's frames)\n"
         "  --size WxH       640x480 or 1920x1080 (default: the scenario's size)\n"
-        "  --scale K        multiply every duration given in frames by K (bigger suites)\n\n"
+        "  --scale K        multiply every duration given in frames by K (bigger suites)\n"
+        "  --labels         also DIR/labels/000000.png ...: per pixel 0 none, 1.. tool index + 1,\n"
+        "                   255 mixed by motion blur (training data for per-pixel models)\n\n"
         "Exit status: 0 done, 1 failed while writing, 2 bad usage or scenario (the\n"
         "message names the file, line and field).\n");
 }
@@ -51,6 +53,10 @@ int run_scene_command(const Args& args) {
         if (k == "--help" || k == "-h") {
             print_scene_help();
             return kExitOk;
+        }
+        if (k == "--labels") {
+            o.labels = true;
+            continue;
         }
         if (k != "--scenario" && k != "--out" && k != "--seed" && k != "--frames" &&
             k != "--size" && k != "--scale")

@@ -19,6 +19,7 @@
 #include "endotower/system/monotonic_clock.hpp"
 #include "endotower/system/syscall.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
 #ifndef ENDOTOWER_DEFAULT_BOARD
@@ -186,7 +187,14 @@ int run_sim_command(const Args& args) {
 
     // The analysis path: the status badge, then the tool tracker, as the board says.
     app::StatusBadge badge;
-    vision::KalmanToolTracker tracker(vision::KalmanToolTrackerParams{.red_binarised = board.tracker == "kalman_red"});
+    vision::KalmanToolTracker kalman(vision::KalmanToolTrackerParams{.red_binarised = board.tracker == "kalman_red"});
+    vision::ToolLikelihood tool_model;
+    if (board.tracker == "likelihood" && !tool_model.load(board.tool_model, error)) {
+        std::fprintf(stderr, "endotower sim: analysis.tool_model: %s\n", error.c_str());
+        return kExitBadInput;
+    }
+    vision::LikelihoodToolTracker likelihood(tool_model);
+    vision::ToolTracker& tracker = board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(likelihood) : kalman;
     vision::ToolTrackingStage tracking(tracker);
     app::StageChain chain;
     if (board.stage == "status_badge") chain.add(&badge);

@@ -87,6 +87,8 @@ RecordingResult write_recording(const RecordingOptions& o, RecordingStats& stats
         return r;
     };
     fs::create_directory(tmp / "frames", ec);
+    if (o.labels) fs::create_directory(tmp / "labels", ec);
+    std::vector<std::uint8_t> labels;
 
     SceneRenderer renderer;
     if (!renderer.init(sc, seed, error)) return fail(RecordingResult::kBadInput);
@@ -116,6 +118,20 @@ RecordingResult write_recording(const RecordingOptions& o, RecordingStats& stats
         if (!ok) {
             error = p.string() + ": cannot write the frame";
             return fail(RecordingResult::kFailed);
+        }
+        if (o.labels) {
+            renderer.tool_labels(labels);
+            const cv::Mat l(image.height, image.width, CV_8U, labels.data());
+            const fs::path lp = tmp / "labels" / name;
+            try {
+                ok = cv::imwrite(lp.string(), l, png);
+            } catch (const cv::Exception&) {
+                ok = false;
+            }
+            if (!ok) {
+                error = lp.string() + ": cannot write the labels";
+                return fail(RecordingResult::kFailed);
+            }
         }
         write_ms += ms_since(t1);
     }

@@ -444,6 +444,19 @@ void SceneRenderer::Impl::render(int index, Image& image, FrameTruth& truth) {
     compute_truth(model, world, index, truth);
 }
 
+void SceneRenderer::tool_labels(std::vector<std::uint8_t>& out) const {
+    const std::vector<std::uint16_t>& ids = impl_->ids;
+    const std::vector<float>& weight = impl_->weight;
+    out.resize(ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        const int id = ids[i];
+        // Tool surfaces are 10 + 8 * tool + (0..7) (world.cpp); distractors from 100.
+        if (weight[i] <= 0) out[i] = 0;
+        else if (id == 0xFFFF) out[i] = kMixedLabel;
+        else out[i] = id >= 10 && id < 100 ? static_cast<std::uint8_t>((id - 10) / 8 + 1) : 0;
+    }
+}
+
 SceneRenderer::SceneRenderer() : impl_(std::make_unique<Impl>()) {}
 SceneRenderer::~SceneRenderer() = default;
 bool SceneRenderer::init(const Scenario& s, std::uint64_t seed, std::string& error) {

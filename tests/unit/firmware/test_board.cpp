@@ -64,7 +64,7 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\nanalysis:\n  stage: magic\n",
          "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
         {"board: t\nanalysis:\n  tracker: cnn\n",
-         "3: field 'analysis.tracker': unknown tracker 'cnn' (expected none, kalman or kalman_red)"},
+         "3: field 'analysis.tracker': unknown tracker 'cnn' (expected none, kalman, kalman_red or likelihood)"},
         {"board: t\nsim:\n  realtime: maybe\n", "3: field 'sim.realtime': expected true or false, got 'maybe'"},
         {"board: t\nanalysis:\n  max_overlay_age: 2.5\n", "3: field 'analysis.max_overlay_age': expected an integer"},
         {"video: {latency_ms: 1}\n", "1: field 'board': missing (the board's name)"},

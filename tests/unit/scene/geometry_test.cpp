@@ -91,6 +91,33 @@ TEST(SceneGeometry, RenderedTipIsWhereTheTruthProjectsIt) {
     }
 }
 
+// `scene --labels`: the per-pixel tool labels are the green pixels, up to the
+// anti-aliased boundary (a pixel's label is its centre's surface).
+TEST(SceneGeometry, ToolLabelsCoverTheToolsPixels) {
+    SceneRenderer r;
+    std::string error;
+    ASSERT_TRUE(r.init(parse_or_fail(kToolOnWhite), 1, error)) << error;
+    std::vector<std::uint8_t> labels;
+    for (int f = 0; f < r.frames(); f += 2) {
+        const Rendered out = render_frame(r, f);
+        r.tool_labels(labels);
+        ASSERT_EQ(labels.size(), out.image.total());
+        int tool = 0, disagree = 0, other = 0;
+        for (int y = 0; y < out.image.rows; ++y)
+            for (int x = 0; x < out.image.cols; ++x) {
+                const cv::Vec3b p = out.image.at<cv::Vec3b>(y, x);
+                const std::uint8_t l = labels[static_cast<std::size_t>(y) * out.image.cols + x];
+                const bool green = p[1] > 128 && p[2] < 128;
+                tool += l == 1;
+                other += l != 0 && l != 1;
+                disagree += (l == 1) != green;
+            }
+        EXPECT_GT(tool, 200) << "frame " << f;
+        EXPECT_EQ(other, 0) << "frame " << f;  // one tool, no motion blur
+        EXPECT_LT(disagree, 0.06 * tool) << "frame " << f;
+    }
+}
+
 TEST(SceneGeometry, CheckerboardCornersAreWhereTheTruthSays) {
     const Scenario s = parse_or_fail(R"(
 frames: 3

@@ -1,6 +1,7 @@
 // Writes a scenario's recording: DIR/frames/000000.png ... (lossless, the input
 // `endotower sim --input DIR/frames` reads), DIR/truth.jsonl (docs/truth.md) and
-// DIR/scenario.yaml (a byte copy of the scenario file).
+// DIR/scenario.yaml (a byte copy of the scenario file); with `labels`, DIR/labels/
+// 000000.png ... (8-bit, SceneRenderer::tool_labels) for training per-pixel models.
 //
 // Atomic: everything is written into DIR.tmp-XXXXXX beside DIR and renamed to DIR at
 // the end; an existing DIR is replaced only if it is empty or an earlier recording
@@ -22,6 +23,7 @@ struct RecordingOptions {
     int frames = 0;             // 0 = the scenario's (after scaling)
     int width = 0, height = 0;  // 0 = the scenario's
     double scale = 1.0;
+    bool labels = false;  // also DIR/labels/000000.png: per-pixel tool labels (tool_labels)
 };
 
 struct RecordingStats {

@@ -41,6 +41,11 @@ public:
     int frames() const;
     // Renders frame `index` (0 <= index < frames()) into `image` and fills `truth`.
     void render(int index, Image& image, FrameTruth& truth);
+    // Per pixel of the last rendered frame, which tool it shows: 0 none (tissue,
+    // target, distractor, flap, outside the field of view), 1.. the tool's index + 1,
+    // kMixedLabel where motion blur mixes surfaces. Row-major, width x height.
+    static constexpr std::uint8_t kMixedLabel = 255;
+    void tool_labels(std::vector<std::uint8_t>& out) const;
 
 private:
     struct Impl;

@@ -1,0 +1,67 @@
+// LikelihoodToolTracker: finds tools as elongated regions of a learned per-pixel tool
+// probability (ToolLikelihood), entering from the border of the field of view.
+//
+// Per frame, on the frame reduced to `analysis_width` (320): the probability of every
+// pixel from the model's table; nothing outside the lit field of view (9x9 mean grey
+// above `surround_fraction` (0.35) x the frame's median grey and above `surround_level`
+// (12), eroded by `surround_margin_px`); a 5x5 Gaussian; threshold at
+// `threshold` (128 = even odds); a 3x3 opening; 8-connected regions. A region is a tool
+// when its area is at least `min_area_fraction` of the frame, its length (principal
+// axis, from the second moments) at least `min_elongation` x its width, and one end
+// lies within `border_touch_fraction` x the frame width of the edge of the lit area or
+// the image border (tools come in through the incision, from outside the picture).
+// Where one region meets the rim in two places (two tools touching or crossing), it is
+// split by two lines fitted alternately to the pixels nearer each (k-lines). The
+// larger regions win, up to `max_tools`.
+// Per tool: the tip is the end away from the rim (mean of the region's pixels within
+// 3 % of the length of that extreme); axis_deg points from the tip to the rim end;
+// width = area / length; the head (joint of shaft and jaws) is `head_widths` widths
+// from the tip along the axis. Identities: regions are matched to last frame's tools
+// by the smallest summed tip distance; a tool missing for `keep_frames` frames loses
+// its id. Results in the full frame's coordinates. Borrows nothing; owns the model.
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "endotower/vision/tool_likelihood.hpp"
+#include "endotower/vision/tool_tracker.hpp"
+
+namespace endotower::vision {
+
+struct LikelihoodToolTrackerParams {
+    int analysis_width = 320;
+    int threshold = 128;
+    int surround_level = 12;
+    double surround_fraction = 0.35;
+    int surround_margin_px = 3;
+    double min_area_fraction = 0.004;
+    double min_elongation = 2.0;
+    double border_touch_fraction = 0.06;
+    double head_widths = 2.7;  // median on simulator training scenes (docs/tracking.md)
+    int keep_frames = 5;
+    std::size_t max_tools = 2;
+};
+
+class LikelihoodToolTracker final : public ToolTracker {
+public:
+    LikelihoodToolTracker(const ToolLikelihood& model, LikelihoodToolTrackerParams params = {});
+    ~LikelihoodToolTracker() override;
+    std::string_view name() const override { return "likelihood"; }
+    void configure(const hal::FrameFormat& format) override;
+    std::size_t track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) override;
+
+private:
+    struct Work;
+    struct Track {
+        int id = -1, missed = 0;
+        Point2 tip;
+    };
+    ToolLikelihood model_;
+    LikelihoodToolTrackerParams params_;
+    std::unique_ptr<Work> work_;
+    std::array<Track, kMaxTools> tracks_{};
+    int next_id_ = 0;
+};
+
+}  // namespace endotower::vision

@@ -1,0 +1,326 @@
+// LikelihoodToolTracker (likelihood_tool_tracker.hpp).
+#include "endotower/vision/likelihood_tool_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace endotower::vision {
+
+namespace {
+
+struct Candidate {
+    double area = 0, length = 0, width = 0, confidence = 0;
+    Point2 tip, rim_end;
+};
+
+struct Px {
+    std::int16_t x, y;
+};
+
+struct RimPixel {
+    double angle, x, y;
+};
+
+struct Line {
+    double px = 0, py = 0, ux = 1, uy = 0;  // a point and the unit direction
+    double distance(double x, double y) const { return std::abs((x - px) * uy - (y - py) * ux); }
+};
+
+// Principal axis of weighted points; false when there are fewer than 3.
+template <typename Pred>
+bool fit_axis(const Px* begin, const Px* end, Pred use, Line& out, double& n, double& l1, double& l2) {
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    n = 0;
+    for (const Px* p = begin; p != end; ++p) {
+        if (!use(p)) continue;
+        n += 1, sx += p->x, sy += p->y, sxx += double(p->x) * p->x, syy += double(p->y) * p->y, sxy += double(p->x) * p->y;
+    }
+    if (n < 3) return false;
+    const double mx = sx / n, my = sy / n;
+    const double cxx = sxx / n - mx * mx, cyy = syy / n - my * my, cxy = sxy / n - mx * my;
+    const double tr = cxx + cyy, det = cxx * cyy - cxy * cxy;
+    l1 = tr / 2 + std::sqrt(std::max(0.0, tr * tr / 4 - det));
+    l2 = std::max(1e-9, tr - l1);
+    const double a = 0.5 * std::atan2(2 * cxy, cxx - cyy);
+    out = {mx, my, std::cos(a), std::sin(a)};
+    return true;
+}
+
+}  // namespace
+
+struct LikelihoodToolTracker::Work {
+    double scale = 1.0;
+    cv::Mat small, prob, gray, lit, rim, binary, labels, kernel_fov, kernel_open;
+    std::vector<int> offsets, fill;
+    std::vector<Px> pixels;
+    std::vector<RimPixel> entries;
+    std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last) into entries
+    std::vector<std::uint8_t> owner;                        // per region pixel: which line
+    std::vector<Candidate> candidates;
+    double fov_cx = 0, fov_cy = 0, fov_r = 0;
+};
+
+LikelihoodToolTracker::LikelihoodToolTracker(const ToolLikelihood& model, LikelihoodToolTrackerParams params)
+    : model_(model), params_(params), work_(std::make_unique<Work>()) {}
+LikelihoodToolTracker::~LikelihoodToolTracker() = default;
+
+void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
+    Work& w = *work_;
+    w.scale = std::min(1.0, static_cast<double>(params_.analysis_width) / format.width);
+    const int sw = std::max(1, static_cast<int>(std::lround(format.width * w.scale)));
+    const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
+    w.small.create(sh, sw, CV_8UC3);
+    w.prob.create(sh, sw, CV_8U);
+    w.lit.create(sh, sw, CV_8U);
+    w.gray.create(sh, sw, CV_8U);
+    w.rim.create(sh, sw, CV_32F);
+    w.binary.create(sh, sw, CV_8U);
+    w.labels.create(sh, sw, CV_32S);
+    const int m = 2 * params_.surround_margin_px + 1;
+    w.kernel_fov = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(m, m));
+    w.kernel_open = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+    w.offsets.reserve(4096);
+    w.fill.reserve(4096);
+    w.pixels.reserve(static_cast<std::size_t>(sw) * sh);
+    w.entries.reserve(static_cast<std::size_t>(sw) * sh / 4);
+    w.owner.reserve(static_cast<std::size_t>(sw) * sh);
+    w.candidates.reserve(64);
+    for (Track& t : tracks_) t = Track{};
+}
+
+std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
+    Work& w = *work_;
+    if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty() || !model_.trained()) return 0;
+    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
+    if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
+    else full.copyTo(w.small);
+    const int W = w.small.cols, H = w.small.rows;
+
+    // Probability per pixel; brightness histogram for the field of view.
+    std::array<int, 256> hist{};
+    for (int y = 0; y < H; ++y) {
+        const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
+        std::uint8_t* q = w.prob.ptr<std::uint8_t>(y);
+        std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
+        for (int x = 0; x < W; ++x, p += 3) {
+            q[x] = model_.probability(p[0], p[1], p[2]);
+            g[x] = static_cast<std::uint8_t>((p[0] + p[1] + p[2]) / 3);
+            ++hist[g[x]];
+        }
+    }
+    // The lit field of view: brighter than `surround_fraction` of the median of the
+    // picture (at least `surround_level`), so a dim letterbox border (real video) is as
+    // dark as the black surround of a scope; blurred first, so a dark shaft inside the
+    // lit area stays inside it.
+    int median = 0;
+    for (int acc = 0; median < 255 && (acc += hist[median]) < W * H / 2;) ++median;
+    const double level = std::max<double>(params_.surround_level, params_.surround_fraction * median);
+    cv::blur(w.gray, w.gray, cv::Size(9, 9));
+    cv::threshold(w.gray, w.lit, level, 255, cv::THRESH_BINARY);
+    const cv::Moments fov = cv::moments(w.lit, true);
+    if (fov.m00 <= 0) return 0;
+    w.fov_cx = fov.m10 / fov.m00;
+    w.fov_cy = fov.m01 / fov.m00;
+    w.fov_r = std::sqrt(fov.m00 / M_PI);
+    // Distance to the edge of the picture (unlit, or the frame's border).
+    cv::distanceTransform(w.lit, w.rim, cv::DIST_L2, 3);
+    cv::erode(w.lit, w.lit, w.kernel_fov);
+    cv::GaussianBlur(w.prob, w.prob, cv::Size(5, 5), 1.2);
+    cv::threshold(w.prob, w.binary, params_.threshold - 1, 255, cv::THRESH_BINARY);
+    cv::bitwise_and(w.binary, w.lit, w.binary);
+    cv::morphologyEx(w.binary, w.binary, cv::MORPH_OPEN, w.kernel_open);
+    const int n = cv::connectedComponents(w.binary, w.labels, 8, CV_32S);
+
+    // Pixels grouped by region (counting sort), so each region is visited once.
+    w.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+    for (int y = 0; y < H; ++y) {
+        const int* l = w.labels.ptr<int>(y);
+        for (int x = 0; x < W; ++x) ++w.offsets[l[x] + 1];
+    }
+    for (int i = 1; i <= n; ++i) w.offsets[i] += w.offsets[i - 1];
+    w.fill.assign(w.offsets.begin(), w.offsets.end() - 1);
+    w.pixels.resize(static_cast<std::size_t>(W) * H);
+    for (int y = 0; y < H; ++y) {
+        const int* l = w.labels.ptr<int>(y);
+        for (int x = 0; x < W; ++x)
+            if (l[x] != 0) w.pixels[w.fill[l[x]]++] = {static_cast<std::int16_t>(x), static_cast<std::int16_t>(y)};
+    }
+    // Distance of a point to the edge of the picture: the lit circle or the frame.
+    auto rim_distance = [&](double x, double y) {
+        const int xi = std::clamp(static_cast<int>(x + 0.5), 0, W - 1), yi = std::clamp(static_cast<int>(y + 0.5), 0, H - 1);
+        return std::min<double>({w.rim.at<float>(yi, xi), x + 1, y + 1, W - x, H - y});
+    };
+    w.candidates.clear();
+    const double min_area = params_.min_area_fraction * W * H, touch = params_.border_touch_fraction * W;
+    for (int i = 1; i < n; ++i) {
+        const Px* begin = w.pixels.data() + w.offsets[i];
+        const Px* end = w.pixels.data() + w.offsets[i + 1];
+        if (end - begin < min_area) continue;
+        // Where the region meets the rim: each tool enters the picture there. Entries
+        // are runs of rim pixels by angle about the field of view's centre.
+        w.entries.clear();
+        for (const Px* p = begin; p != end; ++p)
+            if (rim_distance(p->x, p->y) <= touch)
+                w.entries.push_back({std::atan2(p->y - w.fov_cy, p->x - w.fov_cx), double(p->x), double(p->y)});
+        if (w.entries.empty()) continue;  // not entering from outside the picture
+        std::sort(w.entries.begin(), w.entries.end(), [](const RimPixel& a, const RimPixel& b) { return a.angle < b.angle; });
+        // Runs of entry pixels: a gap along the rim longer than `touch` starts a new one.
+        const double gap = touch / std::max(1.0, w.fov_r);
+        w.runs.clear();
+        std::size_t first = 0;
+        for (std::size_t k = 1; k <= w.entries.size(); ++k)
+            if (k == w.entries.size() || w.entries[k].angle - w.entries[k - 1].angle > gap) {
+                w.runs.push_back({first, k});
+                first = k;
+            }
+        // The runs either side of -pi/pi are one entry: [last.first, size + first.second),
+        // read modulo the entry count.
+        if (w.runs.size() > 1 && w.entries.front().angle + 2 * M_PI - w.entries.back().angle <= gap) {
+            w.runs.front() = {w.runs.back().first, w.entries.size() + w.runs.front().second};
+            w.runs.pop_back();
+        }
+        auto run_size = [](const std::pair<std::size_t, std::size_t>& r) { return r.second - r.first; };
+        std::sort(w.runs.begin(), w.runs.end(), [&](const auto& a, const auto& b) { return run_size(a) > run_size(b); });
+        while (w.runs.size() > kMaxTools || (w.runs.size() > 1 && run_size(w.runs.back()) < 3)) w.runs.pop_back();
+
+        const std::size_t lines = w.runs.size();
+        std::array<Line, kMaxTools> line{};
+        double n_all = 0, l1 = 0, l2 = 0;
+        Line whole;
+        fit_axis(begin, end, [](const Px*) { return true; }, whole, n_all, l1, l2);
+        w.owner.assign(static_cast<std::size_t>(end - begin), 0);
+        if (lines > 1) {
+            // Two tools in one region (touching or crossing): k-lines, each started at
+            // its entry and aimed at the region's centre, then refitted to the pixels
+            // nearer to it than to the other.
+            for (std::size_t j = 0; j < lines; ++j) {
+                double ex = 0, ey = 0, m = 0;
+                for (std::size_t k = w.runs[j].first; k < w.runs[j].second; ++k) {
+                    const RimPixel& e = w.entries[k % w.entries.size()];
+                    ex += e.x, ey += e.y, m += 1;
+                }
+                ex /= m, ey /= m;
+                const double dx = whole.px - ex, dy = whole.py - ey, d = std::max(1e-9, std::hypot(dx, dy));
+                line[j] = {ex, ey, dx / d, dy / d};
+            }
+            for (int iter = 0; iter < 6; ++iter) {
+                for (const Px* p = begin; p != end; ++p) {
+                    std::uint8_t best = 0;
+                    for (std::size_t j = 1; j < lines; ++j)
+                        if (line[j].distance(p->x, p->y) < line[best].distance(p->x, p->y)) best = static_cast<std::uint8_t>(j);
+                    w.owner[p - begin] = best;
+                }
+                for (std::size_t j = 0; j < lines; ++j) {
+                    double nj, a1, a2;
+                    Line fitted;
+                    if (fit_axis(begin, end, [&](const Px* p) { return w.owner[p - begin] == j; }, fitted, nj, a1, a2))
+                        line[j] = fitted;
+                }
+            }
+        } else {
+            line[0] = whole;
+        }
+        for (std::size_t j = 0; j < lines; ++j) {
+            auto mine = [&](const Px* p) { return w.owner[p - begin] == j; };
+            double nj = 0, a1 = 0, a2 = 0;
+            Line axis;
+            if (!fit_axis(begin, end, mine, axis, nj, a1, a2) || nj < (lines > 1 ? 0.5 : 1.0) * min_area) continue;
+            if (std::sqrt(a1 / a2) < params_.min_elongation) continue;
+            double lo = std::numeric_limits<double>::max(), hi = -lo, psum = 0;
+            for (const Px* p = begin; p != end; ++p)
+                if (mine(p)) {
+                    const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+                    lo = std::min(lo, t), hi = std::max(hi, t);
+                    psum += w.prob.at<std::uint8_t>(p->y, p->x);
+                }
+            const double band = std::max(1.0, 0.03 * (hi - lo));
+            Point2 e_lo, e_hi;
+            double n_lo = 0, n_hi = 0;
+            for (const Px* p = begin; p != end; ++p)
+                if (mine(p)) {
+                    const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+                    if (t <= lo + band) e_lo.x += p->x, e_lo.y += p->y, n_lo += 1;
+                    if (t >= hi - band) e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
+                }
+            e_lo = {e_lo.x / n_lo, e_lo.y / n_lo};
+            e_hi = {e_hi.x / n_hi, e_hi.y / n_hi};
+            const double d_lo = rim_distance(e_lo.x, e_lo.y), d_hi = rim_distance(e_hi.x, e_hi.y);
+            if (std::min(d_lo, d_hi) > touch) continue;  // this part does not reach the rim
+            Candidate c;
+            c.area = nj;
+            c.length = std::max(1.0, hi - lo);
+            c.width = nj / c.length;
+            c.tip = d_lo > d_hi ? e_lo : e_hi;
+            c.rim_end = d_lo > d_hi ? e_hi : e_lo;
+            c.confidence = std::clamp(psum / nj / 255.0, 0.0, 1.0);
+            w.candidates.push_back(c);
+        }
+    }
+    std::sort(w.candidates.begin(), w.candidates.end(), [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
+    const std::size_t found = std::min({w.candidates.size(), params_.max_tools, kMaxTools});
+
+    // Identities: the assignment of candidates to live tracks with the least summed tip distance.
+    std::array<int, kMaxTools> track_of{-1, -1};
+    double best = std::numeric_limits<double>::max();
+    const std::size_t nt = std::min(params_.max_tools, kMaxTools);
+    for (int perm = 0; perm < 2; ++perm) {
+        std::array<int, kMaxTools> pick{-1, -1};
+        double cost = 0;
+        for (std::size_t k = 0; k < found; ++k) {
+            const std::size_t t = perm == 0 ? k : (nt - 1 - k);
+            if (t >= nt || tracks_[t].id < 0) continue;
+            pick[k] = static_cast<int>(t);
+            cost += std::hypot(w.candidates[k].tip.x - tracks_[t].tip.x, w.candidates[k].tip.y - tracks_[t].tip.y);
+        }
+        if (cost < best) best = cost, track_of = pick;
+        if (nt < 2) break;
+    }
+    std::array<bool, kMaxTools> used{false, false};
+    for (std::size_t k = 0; k < found; ++k)
+        if (track_of[k] >= 0) used[track_of[k]] = true;
+    for (std::size_t k = 0; k < found; ++k) {
+        if (track_of[k] >= 0) continue;
+        for (std::size_t t = 0; t < nt; ++t)
+            if (!used[t] && tracks_[t].id < 0) {
+                track_of[k] = static_cast<int>(t), used[t] = true;
+                tracks_[t].id = next_id_++;
+                break;
+            }
+        if (track_of[k] < 0)  // both tracks live but unmatched: take the stalest
+            for (std::size_t t = 0; t < nt; ++t)
+                if (!used[t]) {
+                    track_of[k] = static_cast<int>(t), used[t] = true;
+                    tracks_[t].id = next_id_++;
+                    break;
+                }
+    }
+    for (std::size_t t = 0; t < nt; ++t)
+        if (!used[t] && tracks_[t].id >= 0 && ++tracks_[t].missed > params_.keep_frames) tracks_[t] = Track{};
+
+    const double inv = 1.0 / w.scale;
+    std::size_t count = 0;
+    for (std::size_t k = 0; k < found; ++k) {
+        const Candidate& c = w.candidates[k];
+        Track& t = tracks_[track_of[k]];
+        t.tip = c.tip;
+        t.missed = 0;
+        const double dx = c.rim_end.x - c.tip.x, dy = c.rim_end.y - c.tip.y, len = std::max(1e-9, std::hypot(dx, dy));
+        ToolEstimate& e = out[count++];
+        e = ToolEstimate{};
+        e.id = t.id;
+        e.present = true;
+        e.tip = {c.tip.x * inv, c.tip.y * inv};
+        e.head = {(c.tip.x + dx / len * params_.head_widths * c.width) * inv,
+                  (c.tip.y + dy / len * params_.head_widths * c.width) * inv};
+        e.axis_deg = std::atan2(dy, dx) * 180.0 / M_PI;
+        e.width_px = c.width * inv;
+        e.confidence = c.confidence;
+    }
+    return count;
+}
+
+}  // namespace endotower::vision

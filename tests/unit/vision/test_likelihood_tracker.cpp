@@ -1,0 +1,199 @@
+// The learned per-pixel tool model and the tracker built on it: exact table values,
+// the model file's checks, and tools found on synthetic frames with exact truth.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "endotower/vision/likelihood_tool_tracker.hpp"
+#include "endotower/vision/tool_likelihood.hpp"
+
+namespace endotower::vision {
+namespace {
+
+hal::Frame view(cv::Mat& img) {
+    hal::Frame f;
+    f.format = {img.cols, img.rows, static_cast<int>(img.step), hal::PixelFormat::kBgr24};
+    f.data = img.data;
+    return f;
+}
+
+TEST(ToolLikelihood, CellQuantisesChromaticityAndBrightness) {
+    EXPECT_EQ(ToolLikelihood::cell(0, 0, 0), 0);
+    // White: b/(b+g+r) = 1/3 -> round(63/3) = 21 on both axes, brightest level 15.
+    EXPECT_EQ(ToolLikelihood::cell(255, 255, 255), (21 * 64 + 21) * 16 + 15);
+    // Grey at half the brightness: the same chromaticity, level 8 (384 * 16 / 766).
+    EXPECT_EQ(ToolLikelihood::cell(128, 128, 128), (21 * 64 + 21) * 16 + 8);
+    // Pure red: b = g = 0, level 4 (200 * 16 / 766).
+    EXPECT_EQ(ToolLikelihood::cell(0, 0, 200), 4);
+}
+
+// Grey tool pixels left, red tissue right.
+ToolLikelihood trained_grey_vs_red() {
+    cv::Mat img(40, 80, CV_8UC3, cv::Scalar(40, 40, 200));
+    img(cv::Rect(0, 0, 40, 40)).setTo(cv::Scalar(120, 120, 120));
+    std::vector<std::uint8_t> labels(80 * 40, 0);
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 40; ++x) labels[y * 80 + x] = 1;
+    ToolLikelihood m;
+    m.add(view(img), labels.data());
+    std::string error;
+    EXPECT_TRUE(m.finish(error)) << error;
+    return m;
+}
+
+TEST(ToolLikelihood, LearnsToolAndTissueColours) {
+    const ToolLikelihood m = trained_grey_vs_red();
+    EXPECT_EQ(m.probability(120, 120, 120), 255);
+    EXPECT_EQ(m.probability(40, 40, 200), 0);
+    // A neighbouring cell borrows the evidence (3x3x3 smoothing)...
+    EXPECT_EQ(m.probability(125, 118, 118), 255);
+    // ...a colour nobody saw is even odds.
+    EXPECT_EQ(m.probability(40, 200, 40), 128);
+    ToolLikelihood empty;
+    std::string error;
+    EXPECT_FALSE(empty.finish(error));
+    EXPECT_EQ(error, "no tool pixels in the training data");
+}
+
+TEST(ToolLikelihood, ModelFileRoundTripAndCorruptionRefused) {
+    const ToolLikelihood m = trained_grey_vs_red();
+    const std::string bytes = m.serialise();
+    ToolLikelihood back;
+    std::string error;
+    ASSERT_TRUE(back.parse(bytes, "m.bin", error)) << error;
+    EXPECT_EQ(back.table(), m.table());
+    EXPECT_FALSE(back.parse(bytes.substr(0, bytes.size() - 1), "m.bin", error));
+    EXPECT_NE(error.find("m.bin: 65559 bytes"), std::string::npos) << error;
+    std::string flipped = bytes;
+    flipped[100] ^= 1;
+    EXPECT_FALSE(back.parse(flipped, "m.bin", error));
+    EXPECT_EQ(error, "m.bin: checksum mismatch (the file is corrupt)");
+    EXPECT_FALSE(back.parse("P5\n" + bytes, "m.bin", error));
+    EXPECT_NE(error.find("not a tool likelihood model"), std::string::npos);
+    EXPECT_FALSE(back.load("/nonexistent/m.bin", error));
+    EXPECT_EQ(error, "cannot read the tool model /nonexistent/m.bin");
+}
+
+// A 640x480 scope picture: black surround, red tissue in a circle of radius 230,
+// grey shafts of width `width` from outside the circle to their tips.
+struct Shaft {
+    Point2 tip;
+    double dir_deg;  // from the tip towards the incision
+    double width;
+};
+cv::Mat scope_frame(const std::vector<Shaft>& shafts, std::vector<std::uint8_t>* labels = nullptr) {
+    cv::Mat img(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
+    std::mt19937 rng(7);
+    std::normal_distribution<double> noise(0, 4);
+    for (int y = 0; y < 480; ++y)
+        for (int x = 0; x < 640; ++x)
+            if (std::hypot(x - 320, y - 240) < 230)
+                img.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(60 + noise(rng)),
+                                                    cv::saturate_cast<uchar>(50 + noise(rng)),
+                                                    cv::saturate_cast<uchar>(190 + noise(rng)));
+    cv::Mat mask(480, 640, CV_8U, cv::Scalar(0));
+    for (const Shaft& s : shafts) {
+        const double a = s.dir_deg * M_PI / 180, ux = std::cos(a), uy = std::sin(a);
+        const double nx = -uy * s.width / 2, ny = ux * s.width / 2;
+        const cv::Point2d far(s.tip.x + 600 * ux, s.tip.y + 600 * uy);
+        const cv::Point pts[4] = {cv::Point(cvRound(s.tip.x + nx), cvRound(s.tip.y + ny)),
+                                  cv::Point(cvRound(far.x + nx), cvRound(far.y + ny)),
+                                  cv::Point(cvRound(far.x - nx), cvRound(far.y - ny)),
+                                  cv::Point(cvRound(s.tip.x - nx), cvRound(s.tip.y - ny))};
+        cv::fillConvexPoly(mask, pts, 4, cv::Scalar(255));
+    }
+    cv::Mat inside(480, 640, CV_8U, cv::Scalar(0));
+    cv::circle(inside, {320, 240}, 229, cv::Scalar(255), -1);
+    mask &= inside;
+    img.setTo(cv::Scalar(128, 126, 124), mask);
+    if (labels) {
+        labels->assign(mask.data, mask.data + mask.total());
+        for (std::uint8_t& l : *labels) l = l ? 1 : 0;
+    }
+    return img;
+}
+
+LikelihoodToolTracker make_tracker(const std::vector<Shaft>& training) {
+    std::vector<std::uint8_t> labels;
+    cv::Mat img = scope_frame(training, &labels);
+    ToolLikelihood m;
+    m.add(view(img), labels.data());
+    std::string error;
+    EXPECT_TRUE(m.finish(error)) << error;
+    return LikelihoodToolTracker(m);
+}
+
+double angle_diff(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
+
+TEST(LikelihoodToolTracker, FindsTipAxisAndWidthOfOneShaft) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    for (const Shaft s : {Shaft{{330, 200}, 160, 24}, Shaft{{320, 300}, -90, 24}, Shaft{{250, 240}, 0, 30}}) {
+        cv::Mat img = scope_frame({s});
+        tracker.configure(view(img).format);
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        ASSERT_EQ(tracker.track(view(img), out), 1u) << s.dir_deg;
+        // The analysis runs at half size: the tip is the mean of the last 3 % of the
+        // length, so it sits about a pixel inside the end.
+        EXPECT_LT(std::hypot(out[0].tip.x - s.tip.x, out[0].tip.y - s.tip.y), 6.0) << s.dir_deg;
+        EXPECT_LT(angle_diff(out[0].axis_deg, s.dir_deg), 2.0) << s.dir_deg;
+        EXPECT_NEAR(out[0].width_px, s.width, 0.15 * s.width) << s.dir_deg;
+        EXPECT_GT(out[0].confidence, 0.9);
+        // The head is 2.7 widths from the tip along the axis.
+        EXPECT_NEAR(std::hypot(out[0].head.x - out[0].tip.x, out[0].head.y - out[0].tip.y), 2.7 * out[0].width_px, 1e-6);
+    }
+}
+
+TEST(LikelihoodToolTracker, TwoTouchingShaftsAreSplitAndKeepTheirIds) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    std::array<int, 2> ids{-1, -1};
+    for (int t = 0; t < 6; ++t) {
+        // From the left and from below, the second tip touching the first shaft.
+        const Shaft a{{340.0 + 4 * t, 220}, 180, 22}, b{{300.0 + 4 * t, 228}, 80, 22};
+        cv::Mat img = scope_frame({a, b});
+        if (t == 0) tracker.configure(view(img).format);
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        ASSERT_EQ(tracker.track(view(img), out), 2u) << t;
+        for (const Shaft& s : {a, b}) {
+            const ToolEstimate* e = &out[0];
+            if (angle_diff(out[1].axis_deg, s.dir_deg) < angle_diff(out[0].axis_deg, s.dir_deg)) e = &out[1];
+            EXPECT_LT(angle_diff(e->axis_deg, s.dir_deg), 4.0) << t;
+            // Where the tips touch the other shaft the split is ambiguous over about a
+            // width; the book's rule allows two.
+            EXPECT_LT(std::hypot(e->tip.x - s.tip.x, e->tip.y - s.tip.y), s.width) << t;
+        }
+    }
+    // Identities across frames: track the same tracker through a motion.
+    LikelihoodToolTracker moving = make_tracker({{{300, 250}, 200, 24}});
+    cv::Mat first = scope_frame({{{340, 200}, 180, 22}, {{300, 330}, 90, 22}});
+    moving.configure(view(first).format);
+    for (int t = 0; t < 8; ++t) {
+        cv::Mat img = scope_frame({{{340.0 + 5 * t, 200}, 180, 22}, {{300, 330.0 - 5 * t}, 90, 22}});
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        ASSERT_EQ(moving.track(view(img), out), 2u);
+        for (const ToolEstimate& e : std::span(out.data(), 2)) {
+            const int k = angle_diff(e.axis_deg, 180) < 45 ? 0 : 1;
+            if (t == 0) ids[k] = e.id;
+            EXPECT_EQ(e.id, ids[k]) << t;
+        }
+    }
+    EXPECT_NE(ids[0], ids[1]);
+}
+
+TEST(LikelihoodToolTracker, IgnoresGreyThatDoesNotEnterFromTheRim) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    cv::Mat img = scope_frame({});
+    cv::rectangle(img, cv::Rect(260, 230, 120, 24), cv::Scalar(128, 126, 124), -1);  // a grey bar in mid-field
+    tracker.configure(view(img).format);
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    EXPECT_EQ(tracker.track(view(img), out), 0u);
+    LikelihoodToolTracker untrained{ToolLikelihood{}};
+    untrained.configure(view(img).format);
+    EXPECT_EQ(untrained.track(view(img), out), 0u);
+}
+
+}  // namespace
+}  // namespace endotower::vision
