@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/vision/likelihood_tool_tracker.hpp"
 
 namespace {
 
@@ -50,6 +51,50 @@ void BM_KalmanTracker1080p(benchmark::State& state) {
     state.counters["found_fraction"] = static_cast<double>(found) / static_cast<double>(ms.size());
 }
 BENCHMARK(BM_KalmanTracker1080p)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+// The likelihood tracker with the shipped model, on a scope-like frame: black
+// surround, red tissue in the lit circle, a grey shaft entering from the rim.
+void BM_LikelihoodTracker1080p(benchmark::State& state) {
+    vision::ToolLikelihood model;
+    std::string error;
+    if (!model.load(std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/models/tool_likelihood.bin", error)) {
+        state.SkipWithError(error.c_str());
+        return;
+    }
+    vision::LikelihoodToolTracker tracker(model);
+    const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
+    tracker.configure(fmt);
+    std::vector<cv::Mat> frames;
+    for (int t = 0; t < 20; ++t) {
+        cv::Mat img(1080, 1920, CV_8UC3, cv::Scalar(0, 0, 0)), tissue(1080, 1920, CV_8UC3), circle(1080, 1920, CV_8U, cv::Scalar(0));
+        cv::randn(tissue, cv::Scalar(60, 50, 190), cv::Scalar(8, 8, 8));
+        cv::circle(circle, {960, 540}, 520, cv::Scalar(255), -1);
+        tissue.copyTo(img, circle);
+        const double ang = (-20.0 + t) * M_PI / 180.0;
+        const cv::Point2d entry(400, 700), tip(entry.x + 700 * std::cos(ang), entry.y + 700 * std::sin(ang));
+        cv::Mat bar(1080, 1920, CV_8U, cv::Scalar(0));
+        cv::line(bar, entry - (tip - entry), tip, cv::Scalar(255), 60, cv::LINE_AA);
+        img.setTo(cv::Scalar(128, 126, 124), bar & circle);
+        frames.push_back(img);
+    }
+    std::array<vision::ToolEstimate, vision::ToolTracker::kMaxTools> out{};
+    std::vector<double> ms;
+    ms.reserve(100000);
+    std::size_t i = 0, found = 0;
+    for (auto _ : state) {
+        hal::Frame f;
+        f.format = fmt;
+        f.data = frames[i++ % frames.size()].data;
+        const auto t0 = std::chrono::steady_clock::now();
+        found += tracker.track(f, out);
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    state.counters["median_ms"] = ms[ms.size() / 2];
+    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+    state.counters["found_fraction"] = static_cast<double>(found) / static_cast<double>(ms.size());
+}
+BENCHMARK(BM_LikelihoodTracker1080p)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 }  // namespace
 
