@@ -185,7 +185,11 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         }
         auto run_size = [](const std::pair<std::size_t, std::size_t>& r) { return r.second - r.first; };
         std::sort(w.runs.begin(), w.runs.end(), [&](const auto& a, const auto& b) { return run_size(a) > run_size(b); });
-        while (w.runs.size() > kMaxTools || (w.runs.size() > 1 && run_size(w.runs.back()) < 3)) w.runs.pop_back();
+        // A second entry much narrower than the first is a jaw reaching near the rim,
+        // not another shaft coming in (a 5 mm shaft is half a 10 mm one).
+        while (w.runs.size() > kMaxTools ||
+               (w.runs.size() > 1 && run_size(w.runs.back()) < params_.min_entry_ratio * run_size(w.runs.front())))
+            w.runs.pop_back();
 
         const std::size_t lines = w.runs.size();
         std::array<Line, kMaxTools> line{};

@@ -11,7 +11,8 @@
 // lies within `border_touch_fraction` x the frame width of the edge of the lit area or
 // the image border (tools come in through the incision, from outside the picture).
 // Where one region meets the rim in two places (two tools touching or crossing), it is
-// split by two lines fitted alternately to the pixels nearer each (k-lines). The
+// split by two lines fitted alternately to the pixels nearer each (k-lines), when the
+// smaller entry is at least `min_entry_ratio` (0.2) of the larger. The
 // larger regions win, up to `max_tools`.
 // Per tool: the tip is the end away from the rim (mean of the region's pixels within
 // 3 % of the length of that extreme); axis_deg points from the tip to the rim end;
@@ -38,6 +39,7 @@ struct LikelihoodToolTrackerParams {
     double min_area_fraction = 0.004;
     double min_elongation = 2.0;
     double border_touch_fraction = 0.06;
+    double min_entry_ratio = 0.2;  // a second rim entry counts when >= this x the first
     double head_widths = 2.7;  // median on simulator training scenes (docs/tracking.md)
     int keep_frames = 5;
     std::size_t max_tools = 2;
