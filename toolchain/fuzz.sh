@@ -9,11 +9,11 @@ seconds=${1:-60}
 cd "$root"
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
-for t in timeline trace_line board; do
+for t in timeline trace_line board tool_model; do
   work="build/fuzz/corpus-$t"
   rm -rf "$work" && mkdir -p "$work" && cp tests/fuzz/corpus/$t/* "$work/"
   echo "fuzz_$t: ${seconds} s"
-  "build/fuzz/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -max_len=4096 \
+  "build/fuzz/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -max_len=70000 \
     -artifact_prefix="build/fuzz/" -print_final_stats=1 "$work" 2>&1 | grep -E "^(stat::number_of_executed_units|Done|==.*ERROR|SUMMARY)" || true
   test "${PIPESTATUS[0]}" -eq 0
 done

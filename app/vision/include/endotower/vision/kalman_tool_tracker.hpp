@@ -55,7 +55,7 @@ public:
 private:
     struct Work;
     struct Track {
-        MidlineKalman kalman;
+        MidlineKalman kalman{MidlineKalmanParams{}};
         int id = -1;
     };
     void mark_used(const EdgePair& pair);
