@@ -187,7 +187,9 @@ int run_sim_command(const Args& args) {
 
     // The analysis path: the status badge, then the tool tracker, as the board says.
     app::StatusBadge badge;
-    vision::KalmanToolTracker kalman(vision::KalmanToolTrackerParams{.red_binarised = board.tracker == "kalman_red"});
+    vision::KalmanToolTrackerParams kalman_params;
+    kalman_params.red_binarised = board.tracker == "kalman_red";
+    vision::KalmanToolTracker kalman(kalman_params);
     vision::ToolLikelihood tool_model;
     if (board.tracker == "likelihood" && !tool_model.load(board.tool_model, error)) {
         std::fprintf(stderr, "endotower sim: analysis.tool_model: %s\n", error.c_str());
