@@ -174,9 +174,11 @@ void SceneRenderer::Impl::shade_plane(const FrameWorld& w, Vec3 d, double t, flo
         id = black ? 2 : 1;
         return;
     }
-    TexSample s = model.tex.sample(u, v);
-    if (w.background > 0 && !model.tex2.empty() && !model.inside_regions(u, v)) {
-        const TexSample o = model.tex2.sample(u, v);
+    double tu = u, tv = v;  // the tissue point seen here
+    if (w.deform > 0) model.undeform(tu, tv, w.deform);
+    TexSample s = model.tex.sample(tu, tv);
+    if (w.background > 0 && !model.tex2.empty() && !model.inside_regions(tu, tv)) {
+        const TexSample o = model.tex2.sample(tu, tv);
         const float b = static_cast<float>(w.background);
         s = {s.b + b * (o.b - s.b),       s.g + b * (o.g - s.g),    s.r + b * (o.r - s.r),
              s.wet + b * (o.wet - s.wet), s.gu + b * (o.gu - s.gu), s.gv + b * (o.gv - s.gv)};

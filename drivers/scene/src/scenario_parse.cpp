@@ -445,7 +445,8 @@ bool parse_root(Reader& r, const YAML::Node& root, Scenario& s, const std::strin
     if (!r.map(root, "", {"name",        "description", "frames",    "fps",     "size",
                           "seed",        "camera",      "tissue",    "target",  "tools",
                           "distractors", "occluders",   "endoscope", "regions", "light",
-                          "noise",       "motion_blur", "smoke",     "flashes", "factors"}))
+                          "noise",       "motion_blur", "smoke",     "flashes", "factors",
+                          "deformation"}))
         return false;
     if (root["name"] && !r.text(root["name"], "name", s.name)) return false;
     if (root["description"] && !r.text(root["description"], "description", s.description))
@@ -559,6 +560,23 @@ bool parse_root(Reader& r, const YAML::Node& root, Scenario& s, const std::strin
                                500))
                     return false;
         }
+    }
+    if (root["deformation"]) {
+        const YAML::Node& d = root["deformation"];
+        DeformationSpec& x = s.deformation;
+        if (!r.map(d, "deformation", {"center_mm", "radius_mm", "push_mm", "from_frame", "frames"}))
+            return false;
+        if (!d["push_mm"]) return r.fail(d, "deformation.push_mm", "missing");
+        if ((d["center_mm"] && !r.numbers(d["center_mm"], "deformation.center_mm", x.center_mm, 2, -500, 500)) ||
+            (d["radius_mm"] && !r.number(d["radius_mm"], "deformation.radius_mm", x.radius_mm, 1, 500)) ||
+            !r.numbers(d["push_mm"], "deformation.push_mm", x.push_mm, 2, -100, 100) ||
+            (d["from_frame"] && !r.number(d["from_frame"], "deformation.from_frame", x.from_frame, 0, 1e6)) ||
+            (d["frames"] && !r.number(d["frames"], "deformation.frames", x.frames, 1, 1e6)))
+            return false;
+        // The inverse mapping (a fixed point) needs the displacement's slope below 1.
+        if (std::hypot(x.push_mm[0], x.push_mm[1]) >= 1.6 * x.radius_mm)
+            return r.fail(d["push_mm"], "deformation.push_mm",
+                          "a push of 1.6 x radius_mm or more folds the tissue over itself");
     }
     if (root["light"]) {
         const YAML::Node& l = root["light"];

@@ -225,7 +225,9 @@ void compute_truth(const SceneModel& model, const FrameWorld& w, int frame, Fram
             rt.id = rs.id;
             for (const auto& uv : rs.polygon_mm) {
                 Px p;
-                display(cam, w.po + uv[0] * w.pe1 + uv[1] * w.pe2, p);
+                double du = 0, dv = 0;
+                if (w.deform > 0) model.displace(uv[0], uv[1], w.deform, du, dv);
+                display(cam, w.po + (uv[0] + du) * w.pe1 + (uv[1] + dv) * w.pe2, p);
                 rt.polygon_px.push_back(p);
             }
             for (int k = 0; k < 9; ++k) rt.h_from_first[k] = hf.m[k] / hf.m[8];
@@ -258,6 +260,7 @@ void compute_truth(const SceneModel& model, const FrameWorld& w, int frame, Fram
             rt.change = change == "none" && blocked > 0.05 * std::max(1, seen + blocked)
                             ? "occlusion"
                             : change;
+            if (rt.change == "none" && w.deform > 0) rt.change = "deformation";
             out.regions.push_back(rt);
         }
     }

@@ -233,8 +233,36 @@ bool SceneModel::inside_regions(double u, double v) const {
     return false;
 }
 
+double SceneModel::deform_at(double t) const {
+    const DeformationSpec& d = sc.deformation;
+    if (!d.on()) return 0;
+    const double x = std::clamp((t * sc.fps - d.from_frame) / std::max(1e-9, d.frames), 0.0, 1.0);
+    return x * x * (3 - 2 * x);
+}
+
+void SceneModel::displace(double u, double v, double s, double& du, double& dv) const {
+    const DeformationSpec& d = sc.deformation;
+    const double r2 = (u - d.center_mm[0]) * (u - d.center_mm[0]) + (v - d.center_mm[1]) * (v - d.center_mm[1]);
+    const double g = s * std::exp(-r2 / (2 * d.radius_mm * d.radius_mm));
+    du = g * d.push_mm[0];
+    dv = g * d.push_mm[1];
+}
+
+void SceneModel::undeform(double& u, double& v, double s) const {
+    // Fixed point x = q - D(x): converges while |grad D| < 1, i.e. push < 1.6 radius
+    // (the parser's limit); 6 steps reach 1e-4 mm for the suites' pushes.
+    const double qu = u, qv = v;
+    for (int i = 0; i < 6; ++i) {
+        double du, dv;
+        displace(u, v, s, du, dv);
+        u = qu - du;
+        v = qv - dv;
+    }
+}
+
 FrameWorld SceneModel::world_at(double t, int frame) const {
     FrameWorld w;
+    w.deform = deform_at(t);
     w.cam = endoscope.at(t);
     w.light = light_at(frame);
     w.background = endoscope.background_at(t);

@@ -88,6 +88,7 @@ struct FrameWorld {
     std::vector<Capsule> caps;
     std::vector<Flap> flaps;
     double light = 1, background = 0;
+    double deform = 0;  // strength of the tissue deformation, 0..1
     double exposure = 1;  // auto exposure: less gain when the background is near
 
     // Nearest hit among the objects in front of the plane (skipping `skip_tool`).
@@ -115,6 +116,11 @@ struct SceneModel {
     double target_distance(int frame) const;
     FrameWorld world_at(double t, int frame) const;
     bool inside_regions(double u, double v) const;
+    double deform_at(double t) const;
+    // The deformation's displacement of tissue point (u, v) at strength s (forward),
+    // and the tissue point that lands on plane point (u, v) (its inverse).
+    void displace(double u, double v, double s, double& du, double& dv) const;
+    void undeform(double& u, double& v, double s) const;
 };
 
 }  // namespace endotower::scene::detail

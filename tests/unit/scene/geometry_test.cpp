@@ -118,6 +118,41 @@ TEST(SceneGeometry, ToolLabelsCoverTheToolsPixels) {
     }
 }
 
+// Table 6.6's deformation: the truth's outline follows the pushed tissue. A patch of
+// texture at a vertex in frame 0 is found again, by template matching in the last
+// frame, where the truth puts that vertex (the shipped suite, no camera motion).
+TEST(SceneGeometry, DeformedTissueIsWhereTheTruthPutsTheRegion) {
+    Scenario sc;
+    std::string error;
+    ASSERT_TRUE(load_scenario(std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/scenarios/t66_deformation.yaml", sc, error))
+        << error;
+    sc.noise = 0;
+    SceneRenderer r;
+    ASSERT_TRUE(r.init(sc, sc.seed, error)) << error;
+    const Rendered first = render_frame(r, 0), last = render_frame(r, r.frames() - 1);
+    ASSERT_EQ(last.truth.regions.size(), 1u);
+    EXPECT_EQ(last.truth.regions[0].change, "deformation");
+    double moved = 0;
+    for (std::size_t k = 0; k < first.truth.regions[0].polygon_px.size(); ++k) {
+        const Px a = first.truth.regions[0].polygon_px[k], b = last.truth.regions[0].polygon_px[k];
+        moved = std::max(moved, std::hypot(b.x - a.x, b.y - a.y));
+        cv::Mat gray0, gray1, score;
+        cv::cvtColor(first.image, gray0, cv::COLOR_BGR2GRAY);
+        cv::cvtColor(last.image, gray1, cv::COLOR_BGR2GRAY);
+        const int h = 10, search = 30;
+        const cv::Rect patch(cvRound(a.x) - h, cvRound(a.y) - h, 2 * h + 1, 2 * h + 1);
+        const cv::Rect window(cvRound(a.x) - search, cvRound(a.y) - search, 2 * search + 1, 2 * search + 1);
+        cv::matchTemplate(gray1(window), gray0(patch), score, cv::TM_CCOEFF_NORMED);
+        cv::Point best;
+        cv::minMaxLoc(score, nullptr, nullptr, nullptr, &best);
+        // The patch was cut at the rounded vertex: compare displacements.
+        const double fx = window.x + best.x + h - cvRound(a.x), fy = window.y + best.y + h - cvRound(a.y);
+        EXPECT_NEAR(fx, b.x - a.x, 1.5) << "vertex " << k;
+        EXPECT_NEAR(fy, b.y - a.y, 1.5) << "vertex " << k;
+    }
+    EXPECT_GT(moved, 6.0);  // the deformation is not negligible at the vertices
+}
+
 TEST(SceneGeometry, CheckerboardCornersAreWhereTheTruthSays) {
     const Scenario s = parse_or_fail(R"(
 frames: 3

@@ -33,6 +33,9 @@ TEST(SceneScenario, ErrorsNameTheFileLineAndField) {
                  "      - {dwell: 3, loop: {}}\n"),
         "bad.yaml:5: tools[0].motion[0]: expected exactly one of move, pose, dwell, loop, wander");
     EXPECT_EQ(error_of("frames: 10\nlight: 1.5\n"), "bad.yaml:2: light: must be in 0..1, got 1.5");
+    EXPECT_EQ(error_of("frames: 10\ndeformation: {radius_mm: 5, push_mm: [8, 0]}\n"),
+              "bad.yaml:2: deformation.push_mm: a push of 1.6 x radius_mm or more folds the tissue over itself");
+    EXPECT_EQ(error_of("frames: 10\ndeformation: {radius_mm: 5}\n"), "bad.yaml:2: deformation.push_mm: missing");
     EXPECT_EQ(error_of("frames: 10\ntarget: {kind: dots}\n"),
               "bad.yaml:2: target.kind: expected one of white, squares, checkerboard, two_dot, "
               "grid_lines, got 'dots'");

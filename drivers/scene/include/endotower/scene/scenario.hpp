@@ -100,6 +100,17 @@ struct CameraSegment {
     bool background = false;  // the tissue outside the regions changes meanwhile
 };
 
+// Tissue pushed within its plane (table 6.6's deformation): a smooth local
+// displacement D(u, v) = s(t) push exp(-|(u, v) - centre|^2 / (2 radius^2)), s ramping
+// 0 -> 1 (smoothstep) over `frames` from `from_frame`. Off when push is zero.
+struct DeformationSpec {
+    double center_mm[2] = {0, 0};
+    double radius_mm = 12;
+    double push_mm[2] = {0, 0};
+    double from_frame = 0, frames = 10;
+    bool on() const { return push_mm[0] != 0 || push_mm[1] != 0; }
+};
+
 struct RegionSpec {
     int id = 0;
     std::vector<std::array<double, 2>> polygon_mm;  // on the tissue plane (docs)
@@ -120,6 +131,7 @@ struct Scenario {
     std::vector<OccluderSpec> occluders;
     std::vector<CameraSegment> endoscope;
     std::vector<RegionSpec> regions;
+    DeformationSpec deformation;
     double light_from = 0.8, light_to = 0.8;
     double noise = 1.5;        // sensor noise sigma, 8-bit levels
     double motion_blur = 0.0;  // exposure, fraction of the frame period
