@@ -82,7 +82,6 @@ done
     echo "R=$(printf %q "$results")"
     cat <<'STAGE2'
 finish() { echo "$1" >"$R/rc.tmp" && mv "$R/rc.tmp" "$R/rc"; sync; /bin/busybox poweroff -f; sleep 5; }
-mount -t configfs configfs /sys/kernel/config 2>/dev/null
 mount -t debugfs debugfs /sys/kernel/debug 2>/dev/null
 mkdir -p /dev/pts /dev/shm && mount -t devpts devpts /dev/pts && mount -t tmpfs tmpfs /dev/shm
 STAGE2
@@ -91,6 +90,8 @@ STAGE2
         # NAME:OPT=V:OPT2=V -> modprobe NAME OPT=V OPT2=V
         echo "modprobe $(printf '%q ' ${m//:/ }) >>\"\$R/stderr\" 2>&1 || { echo \"run-in-guest: modprobe ${m%%:*} failed\" >>\"\$R/stderr\"; finish 125; }"
     done
+    # configfs is a module in Debian's kernel (gpio-sim is configured through it).
+    echo 'modprobe -q configfs; mount -t configfs configfs /sys/kernel/config 2>/dev/null'
     echo "cd $(printf %q "$PWD") || { echo 'run-in-guest: cannot cd to $(printf %q "$PWD")' >>\"\$R/stderr\"; finish 125; }"
     echo "$(printf '%q ' "$@") >\"\$R/stdout\" 2>>\"\$R/stderr\" </dev/null"
     echo 'finish $?'
