@@ -3,12 +3,14 @@
 // the start. Needs vivid: run it in the qemu guest,
 //   tests/driver/run-in-guest.sh --modules vivid:n_devs=1 -- build/release/tests/bench/bench_capture
 // Under TCG emulation the figures are a report, not a goal (docs/performance.md).
+// On a board: ENDOTOWER_BENCH_CAPTURE=/dev/videoN (see the variables below).
 // "CPU" is the process's CPU time per frame (every thread); "Time" is wall time per
 // frame, i.e. the frame period while the source keeps up.
 #include <benchmark/benchmark.h>
 
 #include <time.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <string>
 
@@ -20,16 +22,26 @@ namespace {
 using namespace endotower;
 
 void BM_CaptureVivid1080p60Yuyv(benchmark::State& state) {
-    std::ifstream name("/sys/class/video4linux/video0/name");
-    std::string n;
-    std::getline(name, n);
-    if (n.rfind("vivid", 0) != 0) {
-        state.SkipWithError("needs /dev/video0 = vivid: run through tests/driver/run-in-guest.sh");
-        return;
-    }
     v4l2::V4l2CaptureConfig c;
     c.input = 3;
     c.dv_timings = "1920x1080p60";
+    if (const char* dev = std::getenv("ENDOTOWER_BENCH_CAPTURE")) {
+        // A real board: ENDOTOWER_BENCH_CAPTURE=/dev/video0 [ENDOTOWER_BENCH_INPUT=N]
+        // [ENDOTOWER_BENCH_DV=query|1920x1080p60|""] [ENDOTOWER_BENCH_FORMAT=uyvy].
+        c.device = dev;
+        c.input = std::getenv("ENDOTOWER_BENCH_INPUT") ? std::atoi(std::getenv("ENDOTOWER_BENCH_INPUT")) : -1;
+        c.dv_timings = std::getenv("ENDOTOWER_BENCH_DV") ? std::getenv("ENDOTOWER_BENCH_DV") : "";
+        if (const char* f = std::getenv("ENDOTOWER_BENCH_FORMAT")) v4l2::parse_capture_format(f, c.format);
+    } else {
+        std::ifstream name("/sys/class/video4linux/video0/name");
+        std::string n;
+        std::getline(name, n);
+        if (n.rfind("vivid", 0) != 0) {
+            state.SkipWithError("needs /dev/video0 = vivid (run through tests/driver/run-in-guest.sh) "
+                                "or ENDOTOWER_BENCH_CAPTURE=DEVICE");
+            return;
+        }
+    }
     v4l2::V4l2Capture cap(c);
     if (!cap.start()) {
         state.SkipWithError(cap.error().c_str());
