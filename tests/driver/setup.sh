@@ -7,13 +7,15 @@
 #
 # Usage: tests/driver/setup.sh [CACHE_DIR]      (default: build/vhw in the repo)
 # Prints the prepared directory (CACHE_DIR/KVER) on stdout. Reruns are instant
-# once CACHE_DIR/KVER/ready exists. Exit 77 when the guest cannot be prepared on
+# once CACHE_DIR/KVER/ready holds the hash of this script and the initramfs init
+# (a change to either prepares the guest again). Exit 77 when the guest cannot be prepared on
 # this machine at all (no qemu, no kernel package obtainable), with the reason on
 # stderr; exit 1 when a step fails.
 set -euo pipefail
 
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 cache=${1:-$repo/build/vhw}
+mkdir -p "$cache" && cache=$(cd "$cache" && pwd)  # kbuild's M= needs an absolute path
 say() { echo "vhw-setup: $*" >&2; }
 skip() { say "SKIP: $*"; exit 77; }
 die() { say "ERROR: $*"; exit 1; }
@@ -47,7 +49,10 @@ if [ -z "$kver" ]; then
     kver=$(ls -d /usr/src/linux-headers-6.1.0-*-amd64 | sed 's|.*/linux-headers-||' | sort -V | tail -n1)
 fi
 out=$cache/$kver
-if [ -f "$out/ready" ]; then echo "$out"; exit 0; fi
+# The cache is valid for this script and the initramfs init as they are now.
+stamp=$(cat "$0" "$repo/tests/driver/guest-initramfs-init.sh" | sha256sum | cut -c1-16)
+ready() { [ "$(cat "$out/ready" 2>/dev/null)" = "$stamp" ]; }
+if ready; then echo "$out"; exit 0; fi
 
 need_packages qemu-system-x86 || skip "qemu-system-x86 is not installed and cannot be installed here"
 command -v qemu-system-x86_64 >/dev/null || skip "qemu-system-x86_64 not found"
@@ -59,7 +64,7 @@ mkdir -p "$cache"
 # Two test binaries may start at once: one prepares, the other waits.
 exec 9>"$cache/.lock"
 flock 9
-if [ -f "$out/ready" ]; then echo "$out"; exit 0; fi
+if ready; then echo "$out"; exit 0; fi
 rm -rf "$out"
 mkdir -p "$out/work"
 work=$out/work
@@ -134,6 +139,6 @@ chmod +x "$ird/init"
 (cd "$ird" && find . | busybox cpio -o -H newc 2>/dev/null) >"$out/initramfs.cpio"
 
 rm -rf "$work"
-touch "$out/ready"
+echo "$stamp" >"$out/ready"
 say "guest ready in $out ($(($(date +%s) - t0)) s)"
 echo "$out"
