@@ -7,6 +7,8 @@
 #include <initializer_list>
 #include <sstream>
 
+#include "endotower/v4l2/capture_format.hpp"
+
 namespace endotower::firmware {
 
 namespace {
@@ -78,6 +80,25 @@ struct Reader {
         return true;
     }
 
+    // A 16-bit id, written 0x1209 or 4617.
+    bool id16(const YAML::Node& map, const char* key, const std::string& field, int& out) {
+        const YAML::Node n = map[key];
+        if (!n) return true;
+        const std::string t = n.IsScalar() ? n.Scalar() : std::string();
+        const bool hex = t.size() > 2 && t[0] == '0' && (t[1] == 'x' || t[1] == 'X');
+        std::size_t used = 0;
+        long v = -1;
+        try {
+            v = std::stol(t, &used, hex ? 16 : 10);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (t.empty() || used != t.size() || v < 0 || v > 0xffff)
+            return fail(n, field, "expected a 16-bit id like 0x1209, got '" + (n.IsScalar() ? t : "?") + "'");
+        out = static_cast<int>(v);
+        return true;
+    }
+
     bool boolean(const YAML::Node& map, const char* key, const std::string& field, bool& out) {
         const YAML::Node n = map[key];
         if (!n) return true;
@@ -90,6 +111,54 @@ struct Reader {
 std::string resolve(const fs::path& base, const std::string& p) {
     if (p.empty() || fs::path(p).is_absolute()) return p;
     return (base / p).lexically_normal().string();
+}
+
+// capture:, button:, handle: (issue 9's input drivers).
+bool load_input_devices(Reader& r, const YAML::Node& root, BoardConfig& c) {
+    if (const YAML::Node n = root["capture"]) {
+        auto& k = c.capture;
+        k.present = true;
+        if (!r.keys(n, "capture", {"device", "format", "width", "height", "fps", "buffers", "input", "dv_timings"}) ||
+            !r.text(n, "device", "capture.device", k.device) || !r.text(n, "format", "capture.format", k.format) ||
+            !r.integer(n, "width", "capture.width", 16, 8192, k.width) ||
+            !r.integer(n, "height", "capture.height", 16, 8192, k.height) ||
+            !r.number(n, "fps", "capture.fps", 0, 1000, k.fps) ||
+            !r.integer(n, "buffers", "capture.buffers", 2, 16, k.buffers) ||
+            !r.integer(n, "input", "capture.input", -1, 255, k.input) ||
+            !r.text(n, "dv_timings", "capture.dv_timings", k.dv_timings))
+            return false;
+        v4l2::CaptureFormat f{};
+        if (!v4l2::parse_capture_format(k.format, f))
+            return r.fail(n["format"], "capture.format",
+                          "unknown format '" + k.format + "' (expected yuyv, uyvy or nv12)");
+        if (!v4l2::info(f).supported) return r.fail(n["format"], "capture.format", std::string(v4l2::info(f).why));
+        v4l2::DvTimingsName dv;
+        if (!k.dv_timings.empty() && k.dv_timings != "query" && !v4l2::parse_dv_timings_name(k.dv_timings, dv))
+            return r.fail(n["dv_timings"], "capture.dv_timings",
+                          "expected query or timings like 1920x1080p60, got '" + k.dv_timings + "'");
+        if (k.device.empty()) return r.fail(n, "capture.device", "must name the video device");
+    }
+    if (const YAML::Node n = root["button"]) {
+        auto& b = c.button;
+        b.present = true;
+        if (!r.keys(n, "button", {"chip", "line", "active_low", "debounce_ms", "long_press_ms"}) ||
+            !r.text(n, "chip", "button.chip", b.chip) || !r.integer(n, "line", "button.line", 0, 511, b.line) ||
+            !r.boolean(n, "active_low", "button.active_low", b.active_low) ||
+            !r.number(n, "debounce_ms", "button.debounce_ms", 0, 1000, b.debounce_ms) ||
+            !r.number(n, "long_press_ms", "button.long_press_ms", 0, 60000, b.long_press_ms))
+            return false;
+        if (b.chip.empty()) return r.fail(n, "button.chip", "missing (gpiochip name, label or number)");
+    }
+    if (const YAML::Node n = root["handle"]) {
+        auto& h = c.handle;
+        h.present = true;
+        if (!r.keys(n, "handle", {"vid", "pid", "serial", "usage_page"}) || !r.id16(n, "vid", "handle.vid", h.vid) ||
+            !r.id16(n, "pid", "handle.pid", h.pid) || !r.text(n, "serial", "handle.serial", h.serial) ||
+            !r.id16(n, "usage_page", "handle.usage_page", h.usage_page))
+            return false;
+        if (!n["vid"] || !n["pid"]) return r.fail(n, "handle", "vid and pid are required");
+    }
+    return true;
 }
 
 }  // namespace
@@ -114,7 +183,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         error = path + ": board file is empty";
         return false;
     }
-    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim"})) return false;
+    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "capture", "button", "handle"}))
+        return false;
     if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
         return false;
@@ -152,6 +222,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             !r.number(s, "fps", "sim.fps", 0, 1000, c.sim_fps))
             return false;
     }
+    if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
     for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model})
         *p = resolve(base, *p);
