@@ -1,5 +1,6 @@
 // End-to-end: the `endotower sim` command on recordings, checked frame by frame.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -34,7 +35,8 @@ CommandResult run(const std::string& args) {
 }
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("endotower_replay_" + name);
+    // Per process: several checkouts may run the suite at once on one machine.
+    const fs::path d = fs::temp_directory_path() / ("endotower_replay_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
