@@ -323,6 +323,14 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         e.axis_deg = std::atan2(dy, dx) * 180.0 / M_PI;
         e.width_px = c.width * inv;
         e.confidence = c.confidence;
+        // The silhouette edges: the axis offset by half the width each side, from the
+        // tip to the rim (what ToolPose needs for the 3-D pose).
+        const double nx = -dy / len * c.width / 2, ny = dx / len * c.width / 2;
+        e.edges.found = true;
+        e.edges.width_px = c.width * inv;
+        e.edges.e1 = {{(c.tip.x + nx) * inv, (c.tip.y + ny) * inv}, {(c.rim_end.x + nx) * inv, (c.rim_end.y + ny) * inv}};
+        e.edges.e2 = {{(c.tip.x - nx) * inv, (c.tip.y - ny) * inv}, {(c.rim_end.x - nx) * inv, (c.rim_end.y - ny) * inv}};
+        e.edges.midline = {e.tip, {c.rim_end.x * inv, c.rim_end.y * inv}};
     }
     return count;
 }
