@@ -1,0 +1,107 @@
+#include "endotower/calibration/fov_monitor.hpp"
+
+#include <cmath>
+
+namespace endotower::calibration {
+
+namespace {
+
+// Luma of pixel (x, y), or -1 outside the frame. For colour formats an integer
+// approximation of Rec. 601 is plenty for an edge that is dark on one side.
+int luma(const hal::Frame& f, int x, int y) {
+    if (x < 0 || y < 0 || x >= f.format.width || y >= f.format.height) return -1;
+    const std::uint8_t* row = f.data + static_cast<std::size_t>(y) * f.format.stride;
+    switch (f.format.pixel_format) {
+        case hal::PixelFormat::kBgr24: {
+            const std::uint8_t* p = row + 3 * x;
+            return (p[0] + 2 * p[1] + p[2]) >> 2;
+        }
+        case hal::PixelFormat::kRgb24: {
+            const std::uint8_t* p = row + 3 * x;
+            return (p[0] + 2 * p[1] + p[2]) >> 2;
+        }
+        case hal::PixelFormat::kBgra32: {
+            const std::uint8_t* p = row + 4 * x;
+            return (p[0] + 2 * p[1] + p[2]) >> 2;
+        }
+        case hal::PixelFormat::kGray8:
+        case hal::PixelFormat::kNv12:
+            return row[x];
+        case hal::PixelFormat::kYuyv:
+            return row[2 * x];
+        case hal::PixelFormat::kUyvy:
+            return row[2 * x + 1];
+    }
+    return -1;
+}
+
+}  // namespace
+
+const char* to_string(FovStatus s) {
+    switch (s) {
+        case FovStatus::kOk: return "ok";
+        case FovStatus::kShifted: return "shifted";
+        case FovStatus::kScopeChanged: return "scope_changed";
+        case FovStatus::kUnknown: return "unknown";
+    }
+    return "unknown";
+}
+
+FovMonitor::FovMonitor(const FovCircle& reference, FovMonitorParams params)
+    : ref_(reference), params_(params) {
+    for (int i = 0; i < kRays; ++i) {
+        const double a = 2.0 * M_PI * i / kRays;
+        cos_[i] = std::cos(a);
+        sin_[i] = std::sin(a);
+    }
+}
+
+FovCheck FovMonitor::check(const hal::Frame& frame) {
+    FovCheck out;
+    if (!ref_.valid() || frame.data == nullptr) return out;
+    const int r0 = static_cast<int>(0.7 * ref_.radius), r1 = static_cast<int>(1.3 * ref_.radius);
+    int n = 0;
+    for (int i = 0; i < kRays; ++i) {
+        auto at = [&](int r) {
+            return luma(frame, static_cast<int>(std::lround(ref_.cx + r * cos_[i])),
+                        static_cast<int>(std::lround(ref_.cy + r * sin_[i])));
+        };
+        const int inside = at(r0);
+        int outside = at(r1);
+        if (outside < 0) {
+            // The circle may reach past the frame edge on this ray: no measurement.
+            continue;
+        }
+        if (inside < 0 || inside - outside < params_.min_edge_contrast) continue;
+        // Walk outwards to the first sample below the mid level; interpolate the crossing.
+        const double mid = 0.5 * (inside + outside);
+        int prev = inside;
+        for (int r = r0 + 1; r <= r1; ++r) {
+            const int v = at(r);
+            if (v < 0) break;
+            if (v < mid) {
+                const double rr = r - 1 + (prev - mid) / static_cast<double>(prev - v);
+                xs_[n] = ref_.cx + rr * cos_[i];
+                ys_[n] = ref_.cy + rr * sin_[i];
+                ++n;
+                break;
+            }
+            prev = v;
+        }
+    }
+    out.rays = n;
+    if (n < params_.min_rays || fit_circle(xs_.data(), ys_.data(), n, out.circle) < 0) {
+        out.circle = {};
+        return out;
+    }
+    out.shift_px = std::hypot(out.circle.cx - ref_.cx, out.circle.cy - ref_.cy);
+    if (std::abs(out.circle.radius - ref_.radius) > params_.radius_tolerance * ref_.radius)
+        out.status = FovStatus::kScopeChanged;
+    else if (out.shift_px > params_.shift_tolerance_px)
+        out.status = FovStatus::kShifted;
+    else
+        out.status = FovStatus::kOk;
+    return out;
+}
+
+}  // namespace endotower::calibration
