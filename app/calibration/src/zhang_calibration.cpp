@@ -32,7 +32,7 @@ void to_cv(const std::vector<View>& views, const std::vector<int>& use, Obj& obj
 }
 
 bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Size size, LensModel model,
-             Fit& fit, std::string& error) {
+             const ZhangOptions& options, Fit& fit, std::string& error) {
     Obj obj;
     Img img;
     to_cv(views, use, obj, img);
@@ -54,7 +54,8 @@ bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Si
                 cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-9));
         } else {
             fit.d = cv::Mat::zeros(5, 1, CV_64F);
-            fit.rms = cv::calibrateCamera(obj, img, size, fit.k, fit.d, fit.rvecs, fit.tvecs);
+            fit.rms = cv::calibrateCamera(obj, img, size, fit.k, fit.d, fit.rvecs, fit.tvecs,
+                                          options.zero_tangent ? cv::CALIB_ZERO_TANGENT_DIST : 0);
         }
     } catch (const cv::Exception& e) {
         error = std::string("OpenCV calibration failed: ") + e.what();
@@ -137,7 +138,7 @@ bool parse_lens_model(const std::string& s, LensModel& out) {
 }
 
 bool calibrate_zhang(const std::vector<View>& views, int width, int height, LensModel model,
-                     ZhangResult& out, std::string& error) {
+                     ZhangResult& out, std::string& error, ZhangOptions options) {
     if (model == LensModel::kBook) {
         error = "the book's model is not an OpenCV calibration";
         return false;
@@ -157,7 +158,7 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
     for (std::size_t i = 0; i < views.size(); ++i) use[i] = static_cast<int>(i);
     ZhangResult result;
     Fit fit;
-    if (!run_fit(views, use, size, model, fit, error)) return false;
+    if (!run_fit(views, use, size, model, options, fit, error)) return false;
     while (use.size() >= 4) {
         // Leave each view out in turn; the one whose absence helps most is the suspect.
         int worst = -1;
@@ -167,7 +168,7 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
             rest.erase(rest.begin() + j);
             Fit f;
             std::string e;
-            if (!run_fit(views, rest, size, model, f, e)) continue;
+            if (!run_fit(views, rest, size, model, options, f, e)) continue;
             if (worst < 0 || f.rms < best.rms) worst = static_cast<int>(j), best = f;
         }
         if (worst < 0 || best.rms > fit.rms * (2.0 / 3.0)) break;
@@ -192,6 +193,14 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
                                          fmt(best.rms) + " px"});
         use.erase(use.begin() + worst);
         fit = best;
+    }
+    const double fmax = 10.0 * std::max(width, height);
+    if (fit.k.at<double>(0, 0) > fmax || fit.k.at<double>(1, 1) > fmax) {
+        char b[200];
+        std::snprintf(b, sizeof b, "implausible focal length fx %.0f fy %.0f px for %dx%d images (RMS %.3f px): the target layout "
+                      "does not match the grid; check --target and --spacing", fit.k.at<double>(0, 0), fit.k.at<double>(1, 1), width, height, fit.rms);
+        error = b;
+        return false;
     }
     Obj obj;
     Img img;

@@ -40,10 +40,16 @@ struct ZhangResult {
     double spacing_error = 0;
 };
 
+struct ZhangOptions {
+    bool zero_tangent = false;  // pinhole: p1 = p2 = 0 (OpenCV's CALIB_ZERO_TANGENT_DIST)
+};
+
 // Calibrates from `views` of images `width` x `height`. False with `error` when
-// fewer than 3 views, a view has fewer than 6 points, or OpenCV fails.
+// fewer than 3 views, a view has fewer than 6 points, OpenCV fails, or the focal
+// length is implausible (over 10x the image size: a field of view under ~6 degrees,
+// the signature of a target layout that does not match the printed grid).
 bool calibrate_zhang(const std::vector<View>& views, int width, int height, LensModel model,
-                     ZhangResult& out, std::string& error);
+                     ZhangResult& out, std::string& error, ZhangOptions options = {});
 
 // Reprojection RMS (px) of `views` under given intrinsics (each view's pose solved).
 double reprojection_rms(const std::vector<View>& views, const ZhangResult& camera);
