@@ -47,7 +47,7 @@ struct Reader {
 }  // namespace
 
 std::string format_calibration(const Calibration& c) {
-    json j;
+    nlohmann::ordered_json j;  // in the order people read them: the camera first
     j["fx"] = c.fx;
     j["fy"] = c.fy;
     j["cx"] = c.cx;

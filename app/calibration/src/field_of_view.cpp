@@ -1,5 +1,7 @@
 #include "endotower/calibration/field_of_view.hpp"
 
+#include "endotower/calibration/fov_monitor.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -103,6 +105,13 @@ bool detect_fov_circle(const GrayImage& image, FovCircle& out, std::string& erro
         return false;
     }
     c.radius += 0.5;
+    // Refine on the rim itself: edges at the local mid level between the lit disc and
+    // the surround along 64 rays (a global threshold is biased where the rim is dim).
+    hal::Frame view;
+    view.format = {image.width, image.height, image.width, hal::PixelFormat::kGray8};
+    view.data = const_cast<std::uint8_t*>(image.pixels.data());
+    const FovCheck refined = FovMonitor(c).check(view);
+    if (refined.status != FovStatus::kUnknown) c = refined.circle;
     out = c;
     return true;
 }

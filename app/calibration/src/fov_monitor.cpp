@@ -59,28 +59,31 @@ FovMonitor::FovMonitor(const FovCircle& reference, FovMonitorParams params)
 FovCheck FovMonitor::check(const hal::Frame& frame) {
     FovCheck out;
     if (!ref_.valid() || frame.data == nullptr) return out;
-    const int r0 = static_cast<int>(0.7 * ref_.radius), r1 = static_cast<int>(1.3 * ref_.radius);
+    const int r_in = static_cast<int>(0.95 * ref_.radius), r_max = static_cast<int>(1.3 * ref_.radius);
+    const int w = frame.format.width, h = frame.format.height;
     int n = 0;
     for (int i = 0; i < kRays; ++i) {
         auto at = [&](int r) {
             return luma(frame, static_cast<int>(std::lround(ref_.cx + r * cos_[i])),
                         static_cast<int>(std::lround(ref_.cy + r * sin_[i])));
         };
-        const int inside = at(r0);
-        int outside = at(r1);
-        if (outside < 0) {
-            // The circle may reach past the frame edge on this ray: no measurement.
-            continue;
-        }
-        if (inside < 0 || inside - outside < params_.min_edge_contrast) continue;
-        // Walk outwards to the first sample below the mid level; interpolate the crossing.
+        // The ray ends at 1.3 R or the frame's edge (16:9 frames clip the circle's
+        // top and bottom); it must pass the rim by a few pixels to measure it.
+        int r1 = r_max;
+        while (r1 > r_in && (std::lround(ref_.cx + r1 * cos_[i]) < 0 || std::lround(ref_.cx + r1 * cos_[i]) >= w ||
+                             std::lround(ref_.cy + r1 * sin_[i]) < 0 || std::lround(ref_.cy + r1 * sin_[i]) >= h))
+            --r1;
+        if (r1 < ref_.radius + 3) continue;
+        const int inside = at(r_in), outside = at(r1);
+        if (inside - outside < params_.min_edge_contrast) continue;  // dark tissue at the rim
+        // Inwards from the dark surround to the first lit sample: the rim, not an
+        // edge in the scene inside it.
         const double mid = 0.5 * (inside + outside);
-        int prev = inside;
-        for (int r = r0 + 1; r <= r1; ++r) {
+        int prev = outside;
+        for (int r = r1 - 1; r >= r_in; --r) {
             const int v = at(r);
-            if (v < 0) break;
-            if (v < mid) {
-                const double rr = r - 1 + (prev - mid) / static_cast<double>(prev - v);
+            if (v >= mid) {
+                const double rr = r + (v - mid) / static_cast<double>(v - prev);
                 xs_[n] = ref_.cx + rr * cos_[i];
                 ys_[n] = ref_.cy + rr * sin_[i];
                 ++n;
@@ -88,6 +91,14 @@ FovCheck FovMonitor::check(const hal::Frame& frame) {
             }
             prev = v;
         }
+    }
+    // One pass of outlier removal: rays whose edge is off the fitted circle by > 3 px.
+    if (n >= params_.min_rays && fit_circle(xs_.data(), ys_.data(), n, out.circle) >= 0) {
+        int m = 0;
+        for (int i = 0; i < n; ++i)
+            if (std::abs(std::hypot(xs_[i] - out.circle.cx, ys_[i] - out.circle.cy) - out.circle.radius) <= 3.0)
+                xs_[m] = xs_[i], ys_[m] = ys_[i], ++m;
+        n = m;
     }
     out.rays = n;
     if (n < params_.min_rays || fit_circle(xs_.data(), ys_.data(), n, out.circle) < 0) {

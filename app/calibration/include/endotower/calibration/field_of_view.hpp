@@ -19,7 +19,8 @@ struct FovCircle {
 
 // Finds the illuminated circle in `image`: threshold between the dark surround and
 // the lit disc, largest component, convex hull (dark tissue at the rim does not cut
-// into it), least-squares circle through the hull points off the image border.
+// into it), least-squares circle through the hull points off the image border; then
+// refined on the rim's local mid level along 64 rays (FovMonitor's measurement).
 // False with `error` naming the image when there is no bright disc, the disc is too
 // small (< 5% of the image) or its outline is not a circle (fit residual > 2% of
 // the radius, or the disc fills < 80% of its circle).

@@ -1,8 +1,10 @@
 // FovMonitor: the per-frame field-of-view check. Measures the illuminated circle's
-// edge along 64 rays from the calibrated centre (0.7 to 1.3 radii out), fits a circle
-// to the edges found and compares it with the calibrated one: a shifted centre means
-// the scope turned in its coupler, a different radius means another scope (or zoom).
-// Reads about 64 x 0.6 R pixels per frame, allocates nothing.
+// edge along 64 rays from the calibrated centre, walking inwards from 1.3 radii (or
+// the frame's edge) to 0.95 radii, fits a circle to the edges found (rays with dark
+// tissue at the rim are skipped, outliers over 3 px dropped) and compares it with
+// the calibrated one: a shifted centre means the scope moved in its coupler, a
+// different radius another scope (or zoom). Reads about 64 x 0.35 R pixels per
+// frame, allocates nothing. A radius change beyond -5%..+30% reads kUnknown.
 #pragma once
 
 #include <array>
