@@ -17,5 +17,6 @@ using Args = std::vector<std::string>;
 int run_sim_command(const Args& args);
 int run_eval_command(const Args& args);
 int run_scene_command(const Args& args);
+int run_calibrate_command(const Args& args);
 
 }  // namespace endotower::firmware

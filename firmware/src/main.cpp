@@ -25,6 +25,7 @@ constexpr Command kCommands[] = {
     {"sim", run_sim_command, "run on a recording, write the output video and a per-frame trace"},
     {"eval", run_eval_command, "score a trace against ground truth, write a report"},
     {"scene", run_scene_command, "render a scenario: frames with exact ground truth"},
+    {"calibrate", run_calibrate_command, "calibrate the scope (centre, focal length, distortion), write its file"},
 };
 
 void print_help() {
