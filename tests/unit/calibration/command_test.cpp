@@ -258,5 +258,53 @@ TEST_F(CalibrateCommand, EndocalGrid) {
     EXPECT_NE(r.out.find("11 of 11 images used"), std::string::npos) << r.out;
 }
 
+// The firmware loads the board's calibration file, validates it and names it in
+// every trace line (file, scope, hash) with the per-frame field-of-view check: the
+// scope's own frames read "ok"; against a calibration whose circle sits 8 px
+// elsewhere they read "shifted". A broken calibration file stops the run (exit 2).
+TEST_F(CalibrateCommand, SimRecordsTheCalibrationInTheTrace) {
+    const fs::path frames = dir / "simin";
+    fs::create_directories(frames);
+    for (int i = 0; i < 6; ++i)
+        fs::copy_file(dir / "white" / ("white" + std::to_string(i % 2) + ".png"), frames / ("00000" + std::to_string(i) + ".png"),
+                      fs::copy_options::overwrite_existing);
+    Calibration c;
+    c.scope = "sim-scope-2";
+    c.width = cam.width, c.height = cam.height;
+    c.fx = cam.fx, c.fy = cam.fy, c.cx = cam.cx, c.cy = cam.cy;
+    c.distortion = {0, 0, 0, 0, 0};
+    c.fov = {cam.fov_cx, cam.fov_cy, cam.fov_radius};
+    for (const double offset : {0.0, 8.0}) {
+        c.fov.cx = cam.fov_cx + offset;
+        const std::string text = format_calibration(c);
+        const fs::path cal = dir / "board_cal.json";
+        std::ofstream(cal) << text;
+        const fs::path board = dir / "board.yaml";
+        std::ofstream(board) << "board: t\ncalibration: board_cal.json\nanalysis: {stage: none}\n";
+        const fs::path trace = dir / "trace.jsonl";
+        const std::string cmd = std::string(ENDOTOWER_BINARY) + " sim --board " + board.string() + " --input " +
+                                frames.string() + " --frames " + (dir / "simout").string() + " --trace " + trace.string() +
+                                " > /dev/null 2>&1";
+        ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+        std::ifstream in(trace);
+        std::string line;
+        int lines = 0, with = 0;
+        const std::string expect = "\"calibration\":{\"file\":\"" + cal.string() + "\",\"scope\":\"sim-scope-2\",\"hash\":\"" +
+                                   content_hash(text) + "\",\"fov\":\"" + (offset == 0 ? "ok" : "shifted") + "\"";
+        while (std::getline(in, line)) {
+            ++lines;
+            with += line.find(expect) != std::string::npos;
+        }
+        EXPECT_GE(lines, 5);
+        // Every frame that shows an analysis result carries the member.
+        EXPECT_GE(with, lines - 2) << expect << "\nlast line: " << line;
+    }
+    std::ofstream(dir / "board_cal.json") << "{\"fx\": 1}";
+    const std::string cmd = std::string(ENDOTOWER_BINARY) + " sim --board " + (dir / "board.yaml").string() + " --input " +
+                            frames.string() + " --frames " + (dir / "simout").string() + " > /dev/null 2>&1";
+    const int status = std::system(cmd.c_str());
+    EXPECT_EQ(WEXITSTATUS(status), 2);
+}
+
 }  // namespace
 }  // namespace endotower::calibration::test
