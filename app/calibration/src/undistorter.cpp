@@ -1,6 +1,8 @@
 #include "endotower/calibration/undistorter.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -8,9 +10,60 @@ namespace endotower::calibration {
 
 struct Undistorter::Impl {
     Calibration cal;
-    cv::Mat map_xy, map_frac;  // fixed point
+    cv::Mat map_xy, map_frac;  // fixed point: source (x, y) and 5-bit fractions (fy << 5 | fx)
     cv::Mat k, d;
+    // Runs of corrected pixels whose four source taps lie in the image and whose
+    // source is inside the field of view; everything else is black.
+    struct Span {
+        int y, x0, x1;  // [x0, x1)
+    };
+    std::vector<Span> spans;
 };
+
+namespace {
+
+// Bilinear sampling with the fixed-point maps (OpenCV's layout: integer source, 5-bit
+// fractions), run by run; the gaps between runs are cleared. No allocation, one thread.
+template <int C>
+void remap_spans(const Undistorter::Impl& m, const hal::Frame& in, hal::Frame& out) {
+    const std::size_t ss = in.format.stride;
+    const std::uint8_t* src = in.data;
+    int y = -1, x_done = 0;
+    std::uint8_t* row = nullptr;
+    const int w = out.format.width;
+    auto finish_row = [&]() {
+        if (row) std::memset(row + C * x_done, 0, static_cast<std::size_t>(C) * (w - x_done));
+    };
+    int next_row = 0;
+    for (const auto& sp : m.spans) {
+        if (sp.y != y) {
+            finish_row();
+            for (; next_row < sp.y; ++next_row)
+                std::memset(out.data + next_row * out.format.stride, 0, static_cast<std::size_t>(C) * w);
+            y = sp.y;
+            next_row = y + 1;
+            row = out.data + static_cast<std::size_t>(y) * out.format.stride;
+            x_done = 0;
+        }
+        std::memset(row + C * x_done, 0, static_cast<std::size_t>(C) * (sp.x0 - x_done));
+        const cv::Vec2s* xy = m.map_xy.ptr<cv::Vec2s>(y);
+        const std::uint16_t* fr = m.map_frac.ptr<std::uint16_t>(y);
+        for (int x = sp.x0; x < sp.x1; ++x) {
+            const std::uint8_t* p = src + static_cast<std::size_t>(xy[x][1]) * ss + static_cast<std::size_t>(xy[x][0]) * C;
+            const int fx = fr[x] & 31, fy = fr[x] >> 5;
+            const int w00 = (32 - fx) * (32 - fy), w01 = fx * (32 - fy), w10 = (32 - fx) * fy, w11 = fx * fy;
+            std::uint8_t* o = row + C * x;
+            for (int c = 0; c < C; ++c)
+                o[c] = static_cast<std::uint8_t>((p[c] * w00 + p[c + C] * w01 + p[ss + c] * w10 + p[ss + c + C] * w11 + 512) >> 10);
+        }
+        x_done = sp.x1;
+    }
+    finish_row();
+    for (; next_row < out.format.height; ++next_row)
+        std::memset(out.data + next_row * out.format.stride, 0, static_cast<std::size_t>(C) * w);
+}
+
+}  // namespace
 
 Undistorter::Undistorter() = default;
 Undistorter::~Undistorter() = default;
@@ -87,6 +140,16 @@ bool Undistorter::init(const Calibration& c, std::string& error) {
             for (int x = 0; x < c.width; ++x)
                 if (!c.fov.contains(fx.at<float>(y, x), fy.at<float>(y, x))) fx.at<float>(y, x) = -10.f;
     cv::convertMaps(fx, fy, impl->map_xy, impl->map_frac, CV_16SC2);
+    for (int y = 0; y < c.height; ++y) {
+        const cv::Vec2s* xy = impl->map_xy.ptr<cv::Vec2s>(y);
+        int start = -1;
+        for (int x = 0; x <= c.width; ++x) {
+            const bool ok = x < c.width && fx.at<float>(y, x) > -1 && xy[x][0] >= 0 && xy[x][1] >= 0 &&
+                            xy[x][0] <= c.width - 2 && xy[x][1] <= c.height - 2;
+            if (ok && start < 0) start = x;
+            if (!ok && start >= 0) impl->spans.push_back({y, start, x}), start = -1;
+        }
+    }
     impl_ = std::move(impl);
     return true;
 }
@@ -103,9 +166,12 @@ bool Undistorter::apply(const hal::Frame& in, hal::Frame& out) const {
         case hal::PixelFormat::kGray8: type = CV_8UC1; break;
         default: return false;
     }
-    const cv::Mat src(in.format.height, in.format.width, type, in.data, in.format.stride);
-    cv::Mat dst(out.format.height, out.format.width, type, out.data, out.format.stride);
-    cv::remap(src, dst, impl_->map_xy, impl_->map_frac, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    const int px = CV_ELEM_SIZE(type);
+    switch (px) {
+        case 1: remap_spans<1>(*impl_, in, out); break;
+        case 3: remap_spans<3>(*impl_, in, out); break;
+        default: remap_spans<4>(*impl_, in, out); break;
+    }
     return true;
 }
 

@@ -2,8 +2,10 @@
 // calibration (book: for every corrected pixel at radius r, the source at
 // r - dr(r) on the same ray, the book's inverse mapping; pinhole/fisheye: OpenCV's
 // undistortion maps with the same camera matrix) and stored as fixed-point maps
-// (CV_16SC2 + 5-bit fractions) for a bilinear remap. Corrected pixels whose source
-// lies outside the image or the calibrated field-of-view circle are black.
+// (CV_16SC2 + 5-bit fractions) for a bilinear remap, applied in runs of pixels
+// inside the field of view by our own loop: OpenCV's remap allocates per call.
+// Corrected pixels whose source lies outside the field-of-view circle, or within one
+// pixel of the frame's right or bottom edge, are black.
 #pragma once
 
 #include <memory>
@@ -32,8 +34,9 @@ public:
     int width() const;
     int height() const;
 
-private:
     struct Impl;
+
+private:
     std::unique_ptr<Impl> impl_;
 };
 
