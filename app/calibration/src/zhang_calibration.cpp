@@ -31,15 +31,17 @@ void to_cv(const std::vector<View>& views, const std::vector<int>& use, Obj& obj
     }
 }
 
+// `guess`: start from these intrinsics (the leave-one-out fits start from the fit
+// with every view: same minimum, a fraction of the iterations).
 bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Size size, LensModel model,
-             const ZhangOptions& options, Fit& fit, std::string& error) {
+             const ZhangOptions& options, Fit& fit, std::string& error, const Fit* guess = nullptr) {
     Obj obj;
     Img img;
     to_cv(views, use, obj, img);
     try {
-        fit.k = cv::Mat::eye(3, 3, CV_64F);
+        fit.k = guess ? guess->k.clone() : cv::Mat::eye(3, 3, CV_64F);
         if (model == LensModel::kFisheye) {
-            fit.d = cv::Mat::zeros(4, 1, CV_64F);
+            fit.d = guess ? guess->d.clone() : cv::Mat::zeros(4, 1, CV_64F);
             std::vector<cv::Mat> o64, i64;
             for (std::size_t v = 0; v < obj.size(); ++v) {
                 cv::Mat o, i;
@@ -50,12 +52,14 @@ bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Si
             }
             fit.rms = cv::fisheye::calibrate(
                 o64, i64, size, fit.k, fit.d, fit.rvecs, fit.tvecs,
-                cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW,
+                cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW |
+                    (guess ? cv::fisheye::CALIB_USE_INTRINSIC_GUESS : 0),
                 cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-9));
         } else {
-            fit.d = cv::Mat::zeros(5, 1, CV_64F);
+            fit.d = guess ? guess->d.clone() : cv::Mat::zeros(5, 1, CV_64F);
             fit.rms = cv::calibrateCamera(obj, img, size, fit.k, fit.d, fit.rvecs, fit.tvecs,
-                                          options.zero_tangent ? cv::CALIB_ZERO_TANGENT_DIST : 0);
+                                          (options.zero_tangent ? cv::CALIB_ZERO_TANGENT_DIST : 0) |
+                                              (guess ? cv::CALIB_USE_INTRINSIC_GUESS : 0));
         }
     } catch (const cv::Exception& e) {
         error = std::string("OpenCV calibration failed: ") + e.what();
@@ -159,7 +163,7 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
     ZhangResult result;
     Fit fit;
     if (!run_fit(views, use, size, model, options, fit, error)) return false;
-    while (use.size() >= 4) {
+    while (options.reject_inconsistent && use.size() >= 4) {
         // Leave each view out in turn; the one whose absence helps most is the suspect.
         int worst = -1;
         Fit best;
@@ -168,7 +172,7 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
             rest.erase(rest.begin() + j);
             Fit f;
             std::string e;
-            if (!run_fit(views, rest, size, model, options, f, e)) continue;
+            if (!run_fit(views, rest, size, model, options, f, e, &fit)) continue;
             if (worst < 0 || f.rms < best.rms) worst = static_cast<int>(j), best = f;
         }
         if (worst < 0 || best.rms > fit.rms * (2.0 / 3.0)) break;

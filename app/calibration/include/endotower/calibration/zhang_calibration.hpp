@@ -41,7 +41,8 @@ struct ZhangResult {
 };
 
 struct ZhangOptions {
-    bool zero_tangent = false;  // pinhole: p1 = p2 = 0 (OpenCV's CALIB_ZERO_TANGENT_DIST)
+    bool zero_tangent = false;        // pinhole: p1 = p2 = 0 (OpenCV's CALIB_ZERO_TANGENT_DIST)
+    bool reject_inconsistent = true;  // the leave-one-out rejection above
 };
 
 // Calibrates from `views` of images `width` x `height`. False with `error` when
