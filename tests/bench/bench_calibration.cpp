@@ -42,7 +42,8 @@ calibration::Calibration scope_1080p() {
     return c;
 }
 
-void record(benchmark::State& state, std::vector<double>& ms, std::int64_t allocs, std::int64_t frames) {
+void record(benchmark::State& state, std::vector<double>& ms, std::int64_t allocs,
+            std::int64_t frames) {
     std::sort(ms.begin(), ms.end());
     state.counters["median_ms"] = ms[ms.size() / 2];
     state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
@@ -83,16 +84,27 @@ void BM_Undistort1080p(benchmark::State& state) {
     if (state.range(0) >= 2) cv::setNumThreads(1);
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
-        if (state.range(0) == 0) u.apply(fi, fo);
-        else if (state.range(0) == 3) cv::remap(in, out, m1, m2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-        else cv::remap(in, out, fx, fy, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        if (state.range(0) == 0)
+            u.apply(fi, fo);
+        else if (state.range(0) == 3)
+            cv::remap(in, out, m1, m2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+        else
+            cv::remap(in, out, fx, fy, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
         ++n;
     }
     cv::setNumThreads(threads);
     record(state, ms, bench::allocations() - a0, n);
 }
-BENCHMARK(BM_Undistort1080p)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_Undistort1080p)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(3)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(3.0);
 
 void BM_FovCheck1080p(benchmark::State& state) {
     const cv::Mat in = frame_1080p();
@@ -108,7 +120,9 @@ void BM_FovCheck1080p(benchmark::State& state) {
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
         ok += monitor.check(f).status == calibration::FovStatus::kOk;
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
         ++n;
     }
     record(state, ms, bench::allocations() - a0, n);

@@ -12,12 +12,14 @@ namespace endotower::calibration {
 // anti-aliased rim counts by how dark it is, so the centre is not quantised to the
 // binary mask. Pixels of other components are skipped. `c` is left alone when the
 // box has no contrast.
-inline void refine_dark_centroid(const cv::Mat& gray, const cv::Mat& labels, const cv::Mat& stats, int i,
-                                 Point2& c) {
+inline void refine_dark_centroid(const cv::Mat& gray, const cv::Mat& labels, const cv::Mat& stats,
+                                 int i, Point2& c) {
     const int x0 = std::max(0, stats.at<int>(i, cv::CC_STAT_LEFT) - 2);
     const int y0 = std::max(0, stats.at<int>(i, cv::CC_STAT_TOP) - 2);
-    const int x1 = std::min(gray.cols, stats.at<int>(i, cv::CC_STAT_LEFT) + stats.at<int>(i, cv::CC_STAT_WIDTH) + 2);
-    const int y1 = std::min(gray.rows, stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) + 2);
+    const int x1 = std::min(
+        gray.cols, stats.at<int>(i, cv::CC_STAT_LEFT) + stats.at<int>(i, cv::CC_STAT_WIDTH) + 2);
+    const int y1 = std::min(
+        gray.rows, stats.at<int>(i, cv::CC_STAT_TOP) + stats.at<int>(i, cv::CC_STAT_HEIGHT) + 2);
     int lo = 255, hi = 0;
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {

@@ -11,8 +11,9 @@ namespace {
 
 bool same_size(const GrayImage& a, const GrayImage& b, std::string& error) {
     if (a.width == b.width && a.height == b.height) return true;
-    error = b.name + ": image size " + std::to_string(b.width) + "x" + std::to_string(b.height) + " differs from " +
-            a.name + " (" + std::to_string(a.width) + "x" + std::to_string(a.height) + "): mixed sizes";
+    error = b.name + ": image size " + std::to_string(b.width) + "x" + std::to_string(b.height) +
+            " differs from " + a.name + " (" + std::to_string(a.width) + "x" +
+            std::to_string(a.height) + "): mixed sizes";
     return false;
 }
 
@@ -44,7 +45,8 @@ Calibration BookResult::calibration(const std::string& scope) const {
 bool run_book_calibration(const BookInputs& in, BookResult& out, std::string& error) {
     BookResult res;
     if (in.white.empty()) {
-        error = "the book's procedure needs white-background images (--white DIR) for the image centre";
+        error =
+            "the book's procedure needs white-background images (--white DIR) for the image centre";
         return false;
     }
     const GrayImage& first = in.white.front();
@@ -61,7 +63,8 @@ bool run_book_calibration(const BookInputs& in, BookResult& out, std::string& er
         res.fov.radius += c.radius / in.white.size();
     }
     for (const FovCircle& c : circles)
-        res.fov_spread_px = std::max(res.fov_spread_px, std::hypot(c.cx - res.fov.cx, c.cy - res.fov.cy));
+        res.fov_spread_px =
+            std::max(res.fov_spread_px, std::hypot(c.cx - res.fov.cx, c.cy - res.fov.cy));
     // Square centres of every chart image.
     std::vector<std::vector<Point2>> centres(in.chart.size());
     std::vector<CentreSquares> grids(in.chart.size());
@@ -74,12 +77,14 @@ bool run_book_calibration(const BookInputs& in, BookResult& out, std::string& er
             error = g.name + ": " + error;
             return false;
         }
-        if (ref < 0 && std::abs(in.chart[i].distance_mm - in.reference_mm) < 1e-9) ref = static_cast<int>(i);
+        if (ref < 0 && std::abs(in.chart[i].distance_mm - in.reference_mm) < 1e-9)
+            ref = static_cast<int>(i);
         if (most < 0 || centres[i].size() > centres[most].size()) most = static_cast<int>(i);
     }
     if (ref < 0) {
         error = "no chart image at the reference distance " + std::to_string(in.reference_mm) +
-                " mm (name one e.g. " + std::to_string(static_cast<int>(in.reference_mm)) + "mm.png)";
+                " mm (name one e.g. " + std::to_string(static_cast<int>(in.reference_mm)) +
+                "mm.png)";
         return false;
     }
     res.reference = grids[ref];
@@ -89,8 +94,9 @@ bool run_book_calibration(const BookInputs& in, BookResult& out, std::string& er
         if (in.chart[i].distance_mm > 0)
             res.distances.push_back({in.chart[i].image.name, in.chart[i].distance_mm,
                                      distance_from_spacing(grids[i].dx, in.pitch_mm, res.fx)});
-    if (!fit_book_distortion(centres[most], grids[most], {res.fov.cx, res.fov.cy}, 0.05 * res.fov.radius, in.order,
-                             res.fov.radius, res.distortion, error)) {
+    if (!fit_book_distortion(centres[most], grids[most], {res.fov.cx, res.fov.cy},
+                             0.05 * res.fov.radius, in.order, res.fov.radius, res.distortion,
+                             error)) {
         error = in.chart[most].image.name + ": " + error;
         return false;
     }
@@ -128,10 +134,13 @@ bool opencv_chart_distance(const Calibration& camera, const GrayImage& chart, co
     if (!detect_square_centres(chart, fov, centres, error)) return false;
     std::vector<cv::Point2f> pts, und;
     for (const Point2& p : centres) pts.emplace_back(p.x, p.y);
-    const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    const cv::Mat k =
+        (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
     const cv::Mat d(camera.distortion, true);
-    if (camera.model == LensModel::kFisheye) cv::fisheye::undistortPoints(pts, und, k, d, cv::noArray(), k);
-    else cv::undistortPoints(pts, und, k, d, cv::noArray(), k);
+    if (camera.model == LensModel::kFisheye)
+        cv::fisheye::undistortPoints(pts, und, k, d, cv::noArray(), k);
+    else
+        cv::undistortPoints(pts, und, k, d, cv::noArray(), k);
     std::vector<Point2> u;
     for (const cv::Point2f& p : und) u.push_back({p.x, p.y});
     CentreSquares g;
@@ -167,7 +176,8 @@ double book_reprojection_rms(const std::vector<View>& views, const Calibration& 
         for (std::size_t i = 0; i < proj.size(); ++i) {
             const double dx = proj[i].x - p.cx, dy = proj[i].y - p.cy, r = std::hypot(dx, dy);
             const double s = r > 0 ? p.distorted_radius(r) / r : 1;
-            const double ex = p.cx + dx * s - v.image_points[i].x, ey = p.cy + dy * s - v.image_points[i].y;
+            const double ex = p.cx + dx * s - v.image_points[i].x,
+                         ey = p.cy + dy * s - v.image_points[i].y;
             ss += ex * ex + ey * ey;
             ++n;
         }

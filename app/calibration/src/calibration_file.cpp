@@ -21,16 +21,19 @@ struct Reader {
         error = source + ": " + what;
         return false;
     }
-    bool number(const json& obj, const char* key, double& out, const std::string& path, bool positive) {
+    bool number(const json& obj, const char* key, double& out, const std::string& path,
+                bool positive) {
         const auto it = obj.find(key);
         if (it == obj.end()) return fail("missing field '" + path + key + "'");
         if (!it->is_number()) return fail("'" + path + key + "' must be a number");
         out = it->get<double>();
         if (!std::isfinite(out) || (positive && !(out > 0)))
-            return fail("'" + path + key + "' must be " + (positive ? "a positive" : "a finite") + " number");
+            return fail("'" + path + key + "' must be " + (positive ? "a positive" : "a finite") +
+                        " number");
         return true;
     }
-    bool numbers(const json& obj, const char* key, std::vector<double>& out, const std::string& path) {
+    bool numbers(const json& obj, const char* key, std::vector<double>& out,
+                 const std::string& path) {
         const auto it = obj.find(key);
         if (it == obj.end()) return fail("missing field '" + path + key + "'");
         if (!it->is_array()) return fail("'" + path + key + "' must be a list of numbers");
@@ -73,7 +76,8 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
         doc = json::parse(text);
     } catch (const json::parse_error& e) {
         const std::size_t upto = std::min<std::size_t>(e.byte, text.size());
-        const long line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(upto), '\n');
+        const long line =
+            1 + std::count(text.begin(), text.begin() + static_cast<long>(upto), '\n');
         error = source + ":" + std::to_string(line) + ": not valid JSON";
         return false;
     }
@@ -81,7 +85,8 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
     if (!doc.is_object()) return r.fail("not a JSON object");
     Calibration c;
     const auto model = doc.find("model");
-    if (model == doc.end() || !model->is_string()) return r.fail("missing field 'model' (pinhole, fisheye or book)");
+    if (model == doc.end() || !model->is_string())
+        return r.fail("missing field 'model' (pinhole, fisheye or book)");
     if (!parse_lens_model(model->get<std::string>(), c.model))
         return r.fail("'model' is '" + model->get<std::string>() + "' (pinhole, fisheye or book)");
     const auto scope = doc.find("scope");
@@ -89,8 +94,9 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
         return r.fail("missing field 'scope' (the scope's name or serial)");
     c.scope = scope->get<std::string>();
     const auto size = doc.find("image_size");
-    if (size == doc.end() || !size->is_array() || size->size() != 2 || !(*size)[0].is_number_integer() ||
-        !(*size)[1].is_number_integer() || (*size)[0].get<int>() <= 0 || (*size)[1].get<int>() <= 0)
+    if (size == doc.end() || !size->is_array() || size->size() != 2 ||
+        !(*size)[0].is_number_integer() || !(*size)[1].is_number_integer() ||
+        (*size)[0].get<int>() <= 0 || (*size)[1].get<int>() <= 0)
         return r.fail("'image_size' must be [width, height], positive integers");
     c.width = (*size)[0].get<int>();
     c.height = (*size)[1].get<int>();
@@ -103,34 +109,41 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
         return r.fail("the centre (cx, cy) lies outside the image");
     const std::size_t nd = c.distortion.size();
     if (c.model == LensModel::kPinhole && nd != 4 && nd != 5 && nd != 8 && nd != 12 && nd != 14)
-        return r.fail("'distortion' has " + std::to_string(nd) + " values; pinhole needs 4, 5, 8, 12 or 14");
+        return r.fail("'distortion' has " + std::to_string(nd) +
+                      " values; pinhole needs 4, 5, 8, 12 or 14");
     if (c.model == LensModel::kFisheye && nd != 4)
         return r.fail("'distortion' has " + std::to_string(nd) + " values; fisheye needs 4");
     if (c.model == LensModel::kBook && (nd < 1 || nd > 5))
-        return r.fail("'distortion' has " + std::to_string(nd) + " values; book needs 1..5 (orders 1..9)");
-    const double r_max = std::hypot(std::max(c.cx, c.width - c.cx), std::max(c.cy, c.height - c.cy));
+        return r.fail("'distortion' has " + std::to_string(nd) +
+                      " values; book needs 1..5 (orders 1..9)");
+    const double r_max =
+        std::hypot(std::max(c.cx, c.width - c.cx), std::max(c.cy, c.height - c.cy));
     if (const auto f = doc.find("fov"); f != doc.end()) {
         if (!f->is_object()) return r.fail("'fov' must be an object {cx, cy, radius}");
-        if (!r.number(*f, "cx", c.fov.cx, "fov.", false) || !r.number(*f, "cy", c.fov.cy, "fov.", false) ||
+        if (!r.number(*f, "cx", c.fov.cx, "fov.", false) ||
+            !r.number(*f, "cy", c.fov.cy, "fov.", false) ||
             !r.number(*f, "radius", c.fov.radius, "fov.", true))
             return false;
     }
     if (const auto b = doc.find("book_polynomial"); b != doc.end()) {
         if (!b->is_object()) return r.fail("'book_polynomial' must be an object {cx, cy, k}");
         RadialPolynomial p;
-        if (!r.number(*b, "cx", p.cx, "book_polynomial.", false) || !r.number(*b, "cy", p.cy, "book_polynomial.", false) ||
+        if (!r.number(*b, "cx", p.cx, "book_polynomial.", false) ||
+            !r.number(*b, "cy", p.cy, "book_polynomial.", false) ||
             !r.numbers(*b, "k", p.k, "book_polynomial."))
             return false;
         if (p.k.empty() || p.k.size() > 5) return r.fail("'book_polynomial.k' needs 1..5 values");
         const double lim = c.fov.valid() ? c.fov.radius : r_max;
         if (!p.monotonic(lim))
-            return r.fail("'book_polynomial' is not monotonic within " + std::to_string(static_cast<int>(lim)) +
+            return r.fail("'book_polynomial' is not monotonic within " +
+                          std::to_string(static_cast<int>(lim)) +
                           " px (the corrected image would fold over)");
         c.book = p;
     }
     if (c.model == LensModel::kBook) {
         if (!c.book) c.book = RadialPolynomial{c.distortion, c.cx, c.cy};
-        if (!RadialPolynomial{c.distortion, c.cx, c.cy}.monotonic(c.fov.valid() ? c.fov.radius : r_max))
+        if (!RadialPolynomial{c.distortion, c.cx, c.cy}.monotonic(c.fov.valid() ? c.fov.radius
+                                                                                : r_max))
             return r.fail("'distortion' (book polynomial) is not monotonic over the image");
     }
     if (const auto s = doc.find("separation"); s != doc.end()) {

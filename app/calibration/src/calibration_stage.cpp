@@ -4,7 +4,8 @@
 
 namespace endotower::calibration {
 
-CalibrationStage::CalibrationStage(const Calibration& calibration, std::string file, std::string hash)
+CalibrationStage::CalibrationStage(const Calibration& calibration, std::string file,
+                                   std::string hash)
     : cal_(calibration), file_(std::move(file)), hash_(std::move(hash)) {}
 
 void CalibrationStage::configure(const hal::FrameFormat& format) {
@@ -24,7 +25,8 @@ void CalibrationStage::process(app::AnalysisContext& ctx) {
         .field("scope", cal_.scope)
         .field("hash", hash_)
         .field("fov", to_string(check.status));
-    if (check.status != FovStatus::kUnknown) ctx.trace.field("fov_shift_px", std::round(check.shift_px * 100) / 100);
+    if (check.status != FovStatus::kUnknown)
+        ctx.trace.field("fov_shift_px", std::round(check.shift_px * 100) / 100);
     ctx.trace.end_object();
 }
 

@@ -1,11 +1,11 @@
 #include "endotower/calibration/field_of_view.hpp"
 
-#include "endotower/calibration/fov_monitor.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+
+#include "endotower/calibration/fov_monitor.hpp"
 
 namespace endotower::calibration {
 
@@ -47,7 +47,8 @@ bool detect_fov_circle(const GrayImage& image, FovCircle& out, std::string& erro
         error = where + ": empty image";
         return false;
     }
-    const cv::Mat gray(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()));
+    const cv::Mat gray(image.height, image.width, CV_8UC1,
+                       const_cast<std::uint8_t*>(image.pixels.data()));
     // Surround and disc levels from the histogram: 2nd and 75th percentiles.
     std::array<long, 256> hist{};
     for (std::uint8_t p : image.pixels) ++hist[p];
@@ -100,7 +101,8 @@ bool detect_fov_circle(const GrayImage& image, FovCircle& out, std::string& erro
     }
     const double fill = hull_area / (M_PI * c.radius * c.radius);
     if (fill < 0.8) {
-        error = where + ": the bright region fills only " + std::to_string(static_cast<int>(fill * 100)) +
+        error = where + ": the bright region fills only " +
+                std::to_string(static_cast<int>(fill * 100)) +
                 "% of its circle (not a field-of-view disc)";
         return false;
     }

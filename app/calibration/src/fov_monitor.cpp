@@ -39,10 +39,14 @@ int luma(const hal::Frame& f, int x, int y) {
 
 const char* to_string(FovStatus s) {
     switch (s) {
-        case FovStatus::kOk: return "ok";
-        case FovStatus::kShifted: return "shifted";
-        case FovStatus::kScopeChanged: return "scope_changed";
-        case FovStatus::kUnknown: return "unknown";
+        case FovStatus::kOk:
+            return "ok";
+        case FovStatus::kShifted:
+            return "shifted";
+        case FovStatus::kScopeChanged:
+            return "scope_changed";
+        case FovStatus::kUnknown:
+            return "unknown";
     }
     return "unknown";
 }
@@ -59,7 +63,8 @@ FovMonitor::FovMonitor(const FovCircle& reference, FovMonitorParams params)
 FovCheck FovMonitor::check(const hal::Frame& frame) {
     FovCheck out;
     if (!ref_.valid() || frame.data == nullptr) return out;
-    const int r_in = static_cast<int>(0.95 * ref_.radius), r_max = static_cast<int>(1.3 * ref_.radius);
+    const int r_in = static_cast<int>(0.95 * ref_.radius),
+              r_max = static_cast<int>(1.3 * ref_.radius);
     const int w = frame.format.width, h = frame.format.height;
     int n = 0;
     for (int i = 0; i < kRays; ++i) {
@@ -70,8 +75,10 @@ FovCheck FovMonitor::check(const hal::Frame& frame) {
         // The ray ends at 1.3 R or the frame's edge (16:9 frames clip the circle's
         // top and bottom); it must pass the rim by a few pixels to measure it.
         int r1 = r_max;
-        while (r1 > r_in && (std::lround(ref_.cx + r1 * cos_[i]) < 0 || std::lround(ref_.cx + r1 * cos_[i]) >= w ||
-                             std::lround(ref_.cy + r1 * sin_[i]) < 0 || std::lround(ref_.cy + r1 * sin_[i]) >= h))
+        while (r1 > r_in && (std::lround(ref_.cx + r1 * cos_[i]) < 0 ||
+                             std::lround(ref_.cx + r1 * cos_[i]) >= w ||
+                             std::lround(ref_.cy + r1 * sin_[i]) < 0 ||
+                             std::lround(ref_.cy + r1 * sin_[i]) >= h))
             --r1;
         if (r1 < ref_.radius + 3) continue;
         const int inside = at(r_in), outside = at(r1);
@@ -96,7 +103,8 @@ FovCheck FovMonitor::check(const hal::Frame& frame) {
     if (n >= params_.min_rays && fit_circle(xs_.data(), ys_.data(), n, out.circle) >= 0) {
         int m = 0;
         for (int i = 0; i < n; ++i)
-            if (std::abs(std::hypot(xs_[i] - out.circle.cx, ys_[i] - out.circle.cy) - out.circle.radius) <= 3.0)
+            if (std::abs(std::hypot(xs_[i] - out.circle.cx, ys_[i] - out.circle.cy) -
+                         out.circle.radius) <= 3.0)
                 xs_[m] = xs_[i], ys_[m] = ys_[i], ++m;
         n = m;
     }

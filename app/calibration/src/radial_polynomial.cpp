@@ -50,8 +50,8 @@ bool fit_radial_polynomial(const std::vector<RadialSample>& samples, int order, 
     const int terms = (order + 1) / 2;
     const int n = static_cast<int>(samples.size());
     if (n < terms) {
-        error = "too few points for an order-" + std::to_string(order) + " fit: " + std::to_string(n) +
-                " (need at least " + std::to_string(terms) + ")";
+        error = "too few points for an order-" + std::to_string(order) +
+                " fit: " + std::to_string(n) + " (need at least " + std::to_string(terms) + ")";
         return false;
     }
     double scale = 0;
@@ -71,8 +71,8 @@ bool fit_radial_polynomial(const std::vector<RadialSample>& samples, int order, 
     }
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
     if (qr.rank() < terms) {
-        error = "degenerate fit: " + std::to_string(n) + " points at too few distinct radii for order " +
-                std::to_string(order);
+        error = "degenerate fit: " + std::to_string(n) +
+                " points at too few distinct radii for order " + std::to_string(order);
         return false;
     }
     const Eigen::VectorXd ks = qr.solve(y);
@@ -86,8 +86,8 @@ bool fit_radial_polynomial(const std::vector<RadialSample>& samples, int order, 
     }
     const double limit = r_max > 0 ? r_max : scale;
     if (!fit.poly.monotonic(limit)) {
-        error = "the order-" + std::to_string(order) +
-                " fit is not monotonic within radius " + std::to_string(static_cast<int>(limit)) +
+        error = "the order-" + std::to_string(order) + " fit is not monotonic within radius " +
+                std::to_string(static_cast<int>(limit)) +
                 " px (the corrected image would fold over): use a lower order or more points";
         return false;
     }

@@ -1,10 +1,10 @@
 #include "endotower/calibration/separation_table.hpp"
 
-#include "blob_centroid.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+
+#include "blob_centroid.hpp"
 
 namespace endotower::calibration {
 
@@ -62,7 +62,8 @@ double SeparationTable::depth_for_separation(double s) const {
 bool detect_two_dots(const GrayImage& image, const FovCircle& fov, Point2& a, Point2& b,
                      std::string& error) {
     const std::string where = image.name.empty() ? std::string("image") : image.name;
-    const cv::Mat gray(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()));
+    const cv::Mat gray(image.height, image.width, CV_8UC1,
+                       const_cast<std::uint8_t*>(image.pixels.data()));
     cv::Mat inside = cv::Mat::zeros(gray.size(), CV_8UC1);
     cv::circle(inside, cv::Point(cvRound(fov.cx), cvRound(fov.cy)), cvRound(fov.radius * 0.97), 255,
                cv::FILLED);

@@ -1,18 +1,20 @@
 #include "endotower/calibration/square_grid.hpp"
 
-#include "blob_centroid.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <queue>
 
+#include "blob_centroid.hpp"
+
 namespace endotower::calibration {
 
 namespace {
 
-double dist(Point2 a, Point2 b) { return std::hypot(a.x - b.x, a.y - b.y); }
+double dist(Point2 a, Point2 b) {
+    return std::hypot(a.x - b.x, a.y - b.y);
+}
 
 // Index of the centre nearest `p` within `tol`, or -1.
 int nearest(const std::vector<Point2>& pts, Point2 p, double tol) {
@@ -30,7 +32,8 @@ int nearest(const std::vector<Point2>& pts, Point2 p, double tol) {
 bool detect_square_centres(const GrayImage& image, const FovCircle& fov, std::vector<Point2>& out,
                            std::string& error) {
     const std::string where = image.name.empty() ? std::string("image") : image.name;
-    const cv::Mat gray(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()));
+    const cv::Mat gray(image.height, image.width, CV_8UC1,
+                       const_cast<std::uint8_t*>(image.pixels.data()));
     cv::Mat inside = cv::Mat::zeros(gray.size(), CV_8UC1);
     const double r_in = fov.radius * 0.98;
     cv::circle(inside, cv::Point(cvRound(fov.cx), cvRound(fov.cy)), cvRound(r_in), 255, cv::FILLED);
@@ -45,7 +48,8 @@ bool detect_square_centres(const GrayImage& image, const FovCircle& fov, std::ve
         return false;
     }
     cv::Mat dummy;
-    const double t = cv::threshold(cv::Mat(in_px).reshape(1, 1), dummy, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+    const double t = cv::threshold(cv::Mat(in_px).reshape(1, 1), dummy, 0, 255,
+                                   cv::THRESH_BINARY | cv::THRESH_OTSU);
     cv::Mat dark;
     cv::threshold(gray, dark, t, 255, cv::THRESH_BINARY_INV);
     dark &= inside;
@@ -53,7 +57,8 @@ bool detect_square_centres(const GrayImage& image, const FovCircle& fov, std::ve
     const int n = cv::connectedComponentsWithStats(dark, labels, stats, cents, 8, CV_32S);
     std::vector<int> areas;
     for (int i = 1; i < n; ++i)
-        if (stats.at<int>(i, cv::CC_STAT_AREA) >= 9) areas.push_back(stats.at<int>(i, cv::CC_STAT_AREA));
+        if (stats.at<int>(i, cv::CC_STAT_AREA) >= 9)
+            areas.push_back(stats.at<int>(i, cv::CC_STAT_AREA));
     if (areas.size() < 9) {
         error = where + ": grid not found (" + std::to_string(areas.size()) +
                 " dark squares inside the field of view, need at least 9)";
@@ -98,8 +103,10 @@ bool find_centre_squares(const std::vector<Point2>& centres, Point2 centre, Cent
     for (std::size_t k = 0; k < std::min<std::size_t>(by_d.size(), 8); ++k) {
         const Point2 d{centres[by_d[k].second].x - o.x, centres[by_d[k].second].y - o.y};
         if (by_d[k].first > 1.5 * by_d[0].first) break;
-        if (!hu && std::abs(d.x) > 2 * std::abs(d.y)) u = d.x > 0 ? d : Point2{-d.x, -d.y}, hu = true;
-        if (!hv && std::abs(d.y) > 2 * std::abs(d.x)) v = d.y > 0 ? d : Point2{-d.x, -d.y}, hv = true;
+        if (!hu && std::abs(d.x) > 2 * std::abs(d.y))
+            u = d.x > 0 ? d : Point2{-d.x, -d.y}, hu = true;
+        if (!hv && std::abs(d.y) > 2 * std::abs(d.x))
+            v = d.y > 0 ? d : Point2{-d.x, -d.y}, hv = true;
     }
     if (!hu || !hv) {
         error = "grid not found: the centre square has no horizontal and vertical neighbours";
@@ -131,14 +138,16 @@ bool find_centre_squares(const std::vector<Point2>& centres, Point2 centre, Cent
     out.max_offset_px = 0;
     for (int j = -1; j <= 1; ++j)
         for (int i = -1; i <= 1; ++i) {
-            const Point2 p{out.origin.x + i * out.u.x + j * out.v.x, out.origin.y + i * out.u.y + j * out.v.y};
+            const Point2 p{out.origin.x + i * out.u.x + j * out.v.x,
+                           out.origin.y + i * out.u.y + j * out.v.y};
             out.max_offset_px = std::max(out.max_offset_px, dist(p, nine[j + 1][i + 1]));
         }
     return true;
 }
 
-std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres, const CentreSquares& grid,
-                                         Point2 c, std::vector<Point2>* measured,
+std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres,
+                                         const CentreSquares& grid, Point2 c,
+                                         std::vector<Point2>* measured,
                                          std::vector<Point2>* actual) {
     // Breadth-first from the centre square: each neighbour is predicted by continuing
     // the measured step that reached the current square (follows the barrel bend).
@@ -161,7 +170,8 @@ std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres, con
             if (index.count(next)) continue;
             Point2 step{di[d] * grid.u.x + dj[d] * grid.v.x, di[d] * grid.u.y + dj[d] * grid.v.y};
             const auto back = index.find({i - di[d], j - dj[d]});
-            if (back != index.end()) step = {p.x - centres[back->second].x, p.y - centres[back->second].y};
+            if (back != index.end())
+                step = {p.x - centres[back->second].x, p.y - centres[back->second].y};
             const int k = nearest(centres, {p.x + step.x, p.y + step.y}, 0.3 * dist(step, {}));
             if (k < 0 || used[k]) continue;
             used[k] = true;
@@ -180,14 +190,14 @@ std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres, con
     return out;
 }
 
-bool fit_book_distortion(const std::vector<Point2>& centres, const CentreSquares& grid, Point2 start,
-                         double search_px, int order, double r_max, BookDistortion& out,
-                         std::string& error) {
+bool fit_book_distortion(const std::vector<Point2>& centres, const CentreSquares& grid,
+                         Point2 start, double search_px, int order, double r_max,
+                         BookDistortion& out, std::string& error) {
     std::vector<Point2> measured, actual;
     radial_samples(centres, grid, start, &measured, &actual);
     if (static_cast<int>(measured.size()) < order + 1) {
-        error = "too few points: " + std::to_string(measured.size()) + " squares on the grid for an order-" +
-                std::to_string(order) + " fit";
+        error = "too few points: " + std::to_string(measured.size()) +
+                " squares on the grid for an order-" + std::to_string(order) + " fit";
         return false;
     }
     auto samples_about = [&](Point2 c) {

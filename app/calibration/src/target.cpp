@@ -14,16 +14,22 @@ bool parse_size(const std::string& s, int& cols, int& rows) {
     char x = 0;
     int consumed = 0;
     return std::sscanf(s.c_str(), "%d%c%d%n", &cols, &x, &rows, &consumed) == 3 && x == 'x' &&
-           consumed == static_cast<int>(s.size()) && cols >= 2 && rows >= 2 && cols <= 100 && rows <= 100;
+           consumed == static_cast<int>(s.size()) && cols >= 2 && rows >= 2 && cols <= 100 &&
+           rows <= 100;
 }
 
 const std::map<std::string, int>& dictionaries() {
     static const std::map<std::string, int> d = {
-        {"DICT_4X4_50", cv::aruco::DICT_4X4_50},     {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
-        {"DICT_4X4_250", cv::aruco::DICT_4X4_250},   {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
-        {"DICT_5X5_100", cv::aruco::DICT_5X5_100},   {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
-        {"DICT_6X6_50", cv::aruco::DICT_6X6_50},     {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
-        {"DICT_7X7_50", cv::aruco::DICT_7X7_50},     {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
+        {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+        {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
+        {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+        {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
+        {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+        {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+        {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
+        {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+        {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
+        {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}};
     return d;
 }
 
@@ -35,11 +41,16 @@ bool parse_target(const std::string& target, const std::string& spacing, TargetS
     const std::string kind = target.substr(0, colon);
     std::string rest = colon == std::string::npos ? "" : target.substr(colon + 1);
     TargetSpec t;
-    if (kind == "chessboard") t.kind = TargetKind::kChessboard;
-    else if (kind == "circles") t.kind = TargetKind::kCircles;
-    else if (kind == "asymmetric-circles") t.kind = TargetKind::kAsymmetricCircles;
-    else if (kind == "charuco") t.kind = TargetKind::kCharuco;
-    else if (kind == "squares") t.kind = TargetKind::kSquares;
+    if (kind == "chessboard")
+        t.kind = TargetKind::kChessboard;
+    else if (kind == "circles")
+        t.kind = TargetKind::kCircles;
+    else if (kind == "asymmetric-circles")
+        t.kind = TargetKind::kAsymmetricCircles;
+    else if (kind == "charuco")
+        t.kind = TargetKind::kCharuco;
+    else if (kind == "squares")
+        t.kind = TargetKind::kSquares;
     else {
         error = "--target '" + target + "': unknown kind '" + kind +
                 "' (chessboard, circles, asymmetric-circles, charuco, squares)";
@@ -51,7 +62,8 @@ bool parse_target(const std::string& target, const std::string& spacing, TargetS
             t.dictionary = rest.substr(c2 + 1);
             rest = rest.substr(0, c2);
             if (!dictionaries().count(t.dictionary)) {
-                error = "--target '" + target + "': unknown ArUco dictionary '" + t.dictionary + "'";
+                error =
+                    "--target '" + target + "': unknown ArUco dictionary '" + t.dictionary + "'";
                 return false;
             }
         }
@@ -99,18 +111,20 @@ bool parse_target(const std::string& target, const std::string& spacing, TargetS
 }
 
 bool detect_target(const GrayImage& image, const TargetSpec& spec, View& out, std::string& error) {
-    const cv::Mat gray(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()));
+    const cv::Mat gray(image.height, image.width, CV_8UC1,
+                       const_cast<std::uint8_t*>(image.pixels.data()));
     const cv::Size size(spec.cols, spec.rows);
     std::vector<cv::Point2f> pts;
     std::vector<cv::Point3f> obj;
     bool found = false;
     switch (spec.kind) {
         case TargetKind::kChessboard:
-            found = cv::findChessboardCorners(gray, size, pts,
-                                              cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+            found = cv::findChessboardCorners(
+                gray, size, pts, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
             if (found)
-                cv::cornerSubPix(gray, pts, cv::Size(11, 11), cv::Size(-1, -1),
-                                 cv::TermCriteria(cv::TermCriteria::EPS | cv::TermCriteria::COUNT, 50, 1e-3));
+                cv::cornerSubPix(
+                    gray, pts, cv::Size(11, 11), cv::Size(-1, -1),
+                    cv::TermCriteria(cv::TermCriteria::EPS | cv::TermCriteria::COUNT, 50, 1e-3));
             for (int r = 0; r < spec.rows; ++r)
                 for (int c = 0; c < spec.cols; ++c)
                     obj.emplace_back(c * spec.spacing_a, r * spec.spacing_b, 0);
@@ -125,12 +139,15 @@ bool detect_target(const GrayImage& image, const TargetSpec& spec, View& out, st
             found = cv::findCirclesGrid(gray, size, pts, cv::CALIB_CB_ASYMMETRIC_GRID);
             for (int r = 0; r < spec.rows; ++r)
                 for (int c = 0; c < spec.cols; ++c)
-                    obj.emplace_back(c * spec.spacing_a + (r % 2) * 0.5 * spec.spacing_a, r * spec.spacing_b, 0);
+                    obj.emplace_back(c * spec.spacing_a + (r % 2) * 0.5 * spec.spacing_a,
+                                     r * spec.spacing_b, 0);
             break;
         case TargetKind::kCharuco: {
-            const auto dict = cv::aruco::getPredefinedDictionary(dictionaries().at(spec.dictionary));
-            const auto board = cv::aruco::CharucoBoard::create(spec.cols, spec.rows, static_cast<float>(spec.spacing_a),
-                                                               static_cast<float>(spec.spacing_b), dict);
+            const auto dict =
+                cv::aruco::getPredefinedDictionary(dictionaries().at(spec.dictionary));
+            const auto board = cv::aruco::CharucoBoard::create(
+                spec.cols, spec.rows, static_cast<float>(spec.spacing_a),
+                static_cast<float>(spec.spacing_b), dict);
             std::vector<int> ids, corner_ids;
             std::vector<std::vector<cv::Point2f>> corners;
             cv::aruco::detectMarkers(gray, dict, corners, ids);
@@ -142,8 +159,9 @@ bool detect_target(const GrayImage& image, const TargetSpec& spec, View& out, st
                 obj.clear();
                 for (int id : corner_ids) obj.push_back(board->chessboardCorners[id]);
             } else {
-                error = image.name + ": ChArUco board not found (" + std::to_string(ids.size()) + " markers, " +
-                        std::to_string(corner_ids.size()) + " corners; need 6 corners)";
+                error = image.name + ": ChArUco board not found (" + std::to_string(ids.size()) +
+                        " markers, " + std::to_string(corner_ids.size()) +
+                        " corners; need 6 corners)";
                 return false;
             }
             break;
@@ -153,7 +171,8 @@ bool detect_target(const GrayImage& image, const TargetSpec& spec, View& out, st
             return false;
     }
     if (!found) {
-        error = image.name + ": grid not found (" + std::to_string(spec.cols) + "x" + std::to_string(spec.rows) +
+        error = image.name + ": grid not found (" + std::to_string(spec.cols) + "x" +
+                std::to_string(spec.rows) +
                 (spec.kind == TargetKind::kChessboard ? " inner corners" : " circles") + ")";
         return false;
     }

@@ -33,8 +33,9 @@ void to_cv(const std::vector<View>& views, const std::vector<int>& use, Obj& obj
 
 // `guess`: start from these intrinsics (the leave-one-out fits start from the fit
 // with every view: same minimum, a fraction of the iterations).
-bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Size size, LensModel model,
-             const ZhangOptions& options, Fit& fit, std::string& error, const Fit* guess = nullptr) {
+bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Size size,
+             LensModel model, const ZhangOptions& options, Fit& fit, std::string& error,
+             const Fit* guess = nullptr) {
     Obj obj;
     Img img;
     to_cv(views, use, obj, img);
@@ -72,8 +73,8 @@ bool run_fit(const std::vector<View>& views, const std::vector<int>& use, cv::Si
     return true;
 }
 
-void project(const std::vector<cv::Point3f>& obj, const cv::Mat& r, const cv::Mat& t, const cv::Mat& k,
-             const cv::Mat& d, LensModel model, std::vector<cv::Point2f>& out) {
+void project(const std::vector<cv::Point3f>& obj, const cv::Mat& r, const cv::Mat& t,
+             const cv::Mat& k, const cv::Mat& d, LensModel model, std::vector<cv::Point2f>& out) {
     if (model == LensModel::kFisheye) {
         std::vector<cv::Point3d> o(obj.begin(), obj.end());
         std::vector<cv::Point2d> p;
@@ -85,8 +86,8 @@ void project(const std::vector<cv::Point3f>& obj, const cv::Mat& r, const cv::Ma
 }
 
 // Pose of one view under fixed intrinsics.
-bool solve_pose(const std::vector<cv::Point3f>& obj, const std::vector<cv::Point2f>& img, const cv::Mat& k,
-                const cv::Mat& d, LensModel model, cv::Mat& r, cv::Mat& t) {
+bool solve_pose(const std::vector<cv::Point3f>& obj, const std::vector<cv::Point2f>& img,
+                const cv::Mat& k, const cv::Mat& d, LensModel model, cv::Mat& r, cv::Mat& t) {
     try {
         if (model == LensModel::kFisheye) {
             std::vector<cv::Point2f> und;
@@ -99,8 +100,9 @@ bool solve_pose(const std::vector<cv::Point3f>& obj, const std::vector<cv::Point
     }
 }
 
-double view_rms(const std::vector<cv::Point3f>& obj, const std::vector<cv::Point2f>& img, const cv::Mat& r,
-                const cv::Mat& t, const cv::Mat& k, const cv::Mat& d, LensModel model) {
+double view_rms(const std::vector<cv::Point3f>& obj, const std::vector<cv::Point2f>& img,
+                const cv::Mat& r, const cv::Mat& t, const cv::Mat& k, const cv::Mat& d,
+                LensModel model) {
     std::vector<cv::Point2f> p;
     project(obj, r, t, k, d, model, p);
     double ss = 0;
@@ -126,18 +128,25 @@ std::string fmt(double v) {
 
 const char* to_string(LensModel m) {
     switch (m) {
-        case LensModel::kPinhole: return "pinhole";
-        case LensModel::kFisheye: return "fisheye";
-        case LensModel::kBook: return "book";
+        case LensModel::kPinhole:
+            return "pinhole";
+        case LensModel::kFisheye:
+            return "fisheye";
+        case LensModel::kBook:
+            return "book";
     }
     return "pinhole";
 }
 
 bool parse_lens_model(const std::string& s, LensModel& out) {
-    if (s == "pinhole") out = LensModel::kPinhole;
-    else if (s == "fisheye") out = LensModel::kFisheye;
-    else if (s == "book") out = LensModel::kBook;
-    else return false;
+    if (s == "pinhole")
+        out = LensModel::kPinhole;
+    else if (s == "fisheye")
+        out = LensModel::kFisheye;
+    else if (s == "book")
+        out = LensModel::kBook;
+    else
+        return false;
     return true;
 }
 
@@ -149,7 +158,8 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
     }
     for (const View& v : views)
         if (v.image_points.size() < 6 || v.image_points.size() != v.object_points.size()) {
-            error = v.name + ": too few points (" + std::to_string(v.image_points.size()) + ", need 6)";
+            error =
+                v.name + ": too few points (" + std::to_string(v.image_points.size()) + ", need 6)";
             return false;
         }
     if (views.size() < 3) {
@@ -186,23 +196,28 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
         std::vector<double> others;
         for (std::size_t j = 0, m = 0; j < use.size(); ++j) {
             if (static_cast<int>(j) == worst) continue;
-            others.push_back(view_rms(obj[j], img[j], best.rvecs[m], best.tvecs[m], best.k, best.d, model));
+            others.push_back(
+                view_rms(obj[j], img[j], best.rvecs[m], best.tvecs[m], best.k, best.d, model));
             ++m;
         }
         const double med = median(others);
         if (!(own > 3 * med && own > 0.5)) break;
         result.dropped.push_back(
-            {views[use[worst]].name, "inconsistent detection: RMS " + fmt(own) + " px under the other views' calibration (their median " +
-                                         fmt(med) + " px); without it the RMS falls from " + fmt(fit.rms) + " to " +
-                                         fmt(best.rms) + " px"});
+            {views[use[worst]].name, "inconsistent detection: RMS " + fmt(own) +
+                                         " px under the other views' calibration (their median " +
+                                         fmt(med) + " px); without it the RMS falls from " +
+                                         fmt(fit.rms) + " to " + fmt(best.rms) + " px"});
         use.erase(use.begin() + worst);
         fit = best;
     }
     const double fmax = 10.0 * std::max(width, height);
     if (fit.k.at<double>(0, 0) > fmax || fit.k.at<double>(1, 1) > fmax) {
         char b[200];
-        std::snprintf(b, sizeof b, "implausible focal length fx %.0f fy %.0f px for %dx%d images (RMS %.3f px): the target layout "
-                      "does not match the grid; check --target and --spacing", fit.k.at<double>(0, 0), fit.k.at<double>(1, 1), width, height, fit.rms);
+        std::snprintf(b, sizeof b,
+                      "implausible focal length fx %.0f fy %.0f px for %dx%d images (RMS %.3f px): "
+                      "the target layout "
+                      "does not match the grid; check --target and --spacing",
+                      fit.k.at<double>(0, 0), fit.k.at<double>(1, 1), width, height, fit.rms);
         error = b;
         return false;
     }
@@ -221,15 +236,19 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
     double spacing_sum = 0;
     int spacing_n = 0;
     for (std::size_t v = 0; v < use.size(); ++v) {
-        result.views.push_back({views[use[v]].name, view_rms(obj[v], img[v], fit.rvecs[v], fit.tvecs[v], fit.k, fit.d, model)});
+        result.views.push_back({views[use[v]].name, view_rms(obj[v], img[v], fit.rvecs[v],
+                                                             fit.tvecs[v], fit.k, fit.d, model)});
         // Back-project onto the target plane: undistort to normalised rays, intersect.
         std::vector<cv::Point2f> und;
-        if (model == LensModel::kFisheye) cv::fisheye::undistortPoints(img[v], und, fit.k, fit.d);
-        else cv::undistortPoints(img[v], und, fit.k, fit.d);
+        if (model == LensModel::kFisheye)
+            cv::fisheye::undistortPoints(img[v], und, fit.k, fit.d);
+        else
+            cv::undistortPoints(img[v], und, fit.k, fit.d);
         cv::Mat rot;
         cv::Rodrigues(fit.rvecs[v], rot);
         const cv::Vec3d n(rot.at<double>(0, 2), rot.at<double>(1, 2), rot.at<double>(2, 2));
-        const cv::Vec3d t(fit.tvecs[v].at<double>(0), fit.tvecs[v].at<double>(1), fit.tvecs[v].at<double>(2));
+        const cv::Vec3d t(fit.tvecs[v].at<double>(0), fit.tvecs[v].at<double>(1),
+                          fit.tvecs[v].at<double>(2));
         std::vector<cv::Vec3d> pts;
         for (const cv::Point2f& u : und) {
             const cv::Vec3d ray(u.x, u.y, 1.0);
@@ -253,7 +272,8 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
 }
 
 double reprojection_rms(const std::vector<View>& views, const ZhangResult& camera) {
-    cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    cv::Mat k =
+        (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
     cv::Mat d(camera.distortion, true);
     Obj obj;
     Img img;

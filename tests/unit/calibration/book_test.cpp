@@ -83,7 +83,8 @@ TEST(BookFieldOfView, CentreWithinOnePixelOnSimulatorFrames) {
 // centre of its field-of-view mask (computed here from the mask's pixels).
 TEST(BookFieldOfView, CentreWithinThreePixelsOfTheEndosegMask) {
     const std::string dir = shared_data("endoseg_fov");
-    if (!std::filesystem::is_directory(dir)) GTEST_SKIP() << "no real data at " << dir << " (../shared/data absent)";
+    if (!std::filesystem::is_directory(dir))
+        GTEST_SKIP() << "no real data at " << dir << " (../shared/data absent)";
     GrayImage frame, mask;
     std::string error;
     ASSERT_TRUE(load_gray_image(dir + "/demo.jpg", frame, error)) << error;
@@ -122,8 +123,8 @@ struct ChartFrame {
 };
 
 // Renders the chart at 50, 40, 60, 70, 80, 90 mm and runs the book's steps on it.
-void chart_frames(const FovCircle& fov, std::vector<ChartFrame>& out, const scene::CameraModel** camera,
-                  scene::SceneRenderer& r) {
+void chart_frames(const FovCircle& fov, std::vector<ChartFrame>& out,
+                  const scene::CameraModel** camera, scene::SceneRenderer& r) {
     std::string error;
     ASSERT_TRUE(r.init(scenario_or_fail(kChart), 23, error)) << error;
     *camera = &r.camera();
@@ -180,12 +181,14 @@ TEST(BookSimulator, Table24TrendAndTable25CorrectedRadii) {
         BookDistortion bd3;
         for (int k = 0; k < 4; ++k) {
             BookDistortion bd;
-            ASSERT_TRUE(fit_book_distortion(f.centres, f.grid, {fov.cx, fov.cy}, 12, 2 * k + 1, fov.radius, bd, error))
+            ASSERT_TRUE(fit_book_distortion(f.centres, f.grid, {fov.cx, fov.cy}, 12, 2 * k + 1,
+                                            fov.radius, bd, error))
                 << error;
             total[k] = bd.fit.total_error;
             if (k == 1) bd3 = bd;
         }
-        std::printf("table 2.4 at %.0f mm: %.4f %.4f %.4f %.4f\n", f.distance_mm, total[0], total[1], total[2], total[3]);
+        std::printf("table 2.4 at %.0f mm: %.4f %.4f %.4f %.4f\n", f.distance_mm, total[0],
+                    total[1], total[2], total[3]);
         EXPECT_GT(total[0], total[1]);
         EXPECT_GE(total[1], total[2]);
         EXPECT_GE(total[2], total[3] - 1e-9);
@@ -198,7 +201,8 @@ TEST(BookSimulator, Table24TrendAndTable25CorrectedRadii) {
         for (std::size_t k = 0; k < bd3.samples.size(); ++k) {
             double rc = 0;
             ASSERT_TRUE(bd3.fit.poly.corrected_radius(bd3.samples[k].r - bd3.samples[k].dr, rc));
-            EXPECT_NEAR(rc, bd3.samples[k].r, 0.5) << "square at actual radius " << bd3.samples[k].r;
+            EXPECT_NEAR(rc, bd3.samples[k].r, 0.5)
+                << "square at actual radius " << bd3.samples[k].r;
             worst_actual = std::max(worst_actual, std::abs(rc - bd3.samples[k].r));
             // The same square in the truth (nearest displayed point).
             std::size_t t = 0;
@@ -209,7 +213,8 @@ TEST(BookSimulator, Table24TrendAndTable25CorrectedRadii) {
                 if (d < best) best = d, t = j;
             }
             ASSERT_LT(best, 1.0);
-            const double rt = std::hypot(f.truth.target.points_px_u[t].x - cam->cx, f.truth.target.points_px_u[t].y - cam->cy);
+            const double rt = std::hypot(f.truth.target.points_px_u[t].x - cam->cx,
+                                         f.truth.target.points_px_u[t].y - cam->cy);
             sxy += rc * rt, sxx += rt * rt;
             corrected_truth.push_back({rc, rt});
         }
@@ -219,8 +224,10 @@ TEST(BookSimulator, Table24TrendAndTable25CorrectedRadii) {
             EXPECT_NEAR(rc, scale * rt, 0.5) << "truth radius " << rt;
             worst_truth = std::max(worst_truth, std::abs(rc - scale * rt));
         }
-        std::printf("table 2.5 at %.0f mm: centre (%.2f, %.2f), worst |corrected - actual| %.3f px, vs truth (scale %.4f) %.3f px\n",
-                    f.distance_mm, bd3.fit.poly.cx, bd3.fit.poly.cy, worst_actual, scale, worst_truth);
+        std::printf(
+            "table 2.5 at %.0f mm: centre (%.2f, %.2f), worst |corrected - actual| %.3f px, vs "
+            "truth (scale %.4f) %.3f px\n",
+            f.distance_mm, bd3.fit.poly.cx, bd3.fit.poly.cy, worst_actual, scale, worst_truth);
     }
 }
 
@@ -234,7 +241,8 @@ TEST(BookRadialFit, BadInput) {
     EXPECT_FALSE(fit_radial_polynomial({{0, 0}, {0, 0}}, 1, fit, error));
     EXPECT_NE(error.find("degenerate"), std::string::npos) << error;
     // Distortion growing faster than the radius: r - dr(r) turns back (folds).
-    EXPECT_FALSE(fit_radial_polynomial({{50, 5}, {100, 40}, {150, 120}, {200, 240}}, 3, fit, error));
+    EXPECT_FALSE(
+        fit_radial_polynomial({{50, 5}, {100, 40}, {150, 120}, {200, 240}}, 3, fit, error));
     EXPECT_NE(error.find("not monotonic"), std::string::npos) << error;
     EXPECT_FALSE(fit_radial_polynomial({{50, 1}}, 2, fit, error));
     EXPECT_NE(error.find("must be odd"), std::string::npos) << error;
@@ -276,7 +284,8 @@ TEST(BookSeparation, TwoDotTableFromSimulatorFrames) {
     const FovCircle fov = white_fov(error);
     ASSERT_TRUE(fov.valid()) << error;
     scene::SceneRenderer r;
-    const std::string path = std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/scenarios/fig33_two_dot.yaml";
+    const std::string path =
+        std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/scenarios/fig33_two_dot.yaml";
     scene::Scenario sc;
     ASSERT_TRUE(scene::load_scenario(path, sc, error)) << error;
     ASSERT_TRUE(r.init(sc, 33, error)) << error;
@@ -300,7 +309,8 @@ TEST(BookSeparation, TwoDotTableFromSimulatorFrames) {
         half.separation_px.push_back(table.separation_px[i]);
     }
     for (std::size_t i = 1; i + 1 < table.distances_mm.size(); i += 2)
-        EXPECT_NEAR(half.separation_at(table.distances_mm[i]), table.separation_px[i], 0.03 * table.separation_px[i]);
+        EXPECT_NEAR(half.separation_at(table.distances_mm[i]), table.separation_px[i],
+                    0.03 * table.separation_px[i]);
 }
 
 }  // namespace

@@ -47,7 +47,8 @@ std::string read(const fs::path& p) {
 }
 
 void save(const fs::path& p, const scene::Image& img) {
-    cv::imwrite(p.string(), cv::Mat(img.height, img.width, CV_8UC3, const_cast<std::uint8_t*>(img.bgr.data())));
+    cv::imwrite(p.string(),
+                cv::Mat(img.height, img.width, CV_8UC3, const_cast<std::uint8_t*>(img.bgr.data())));
 }
 
 // A 9x6-inner-corner chessboard (4 mm squares, one white square of margin) at pose
@@ -75,10 +76,13 @@ cv::Mat render_chessboard(const scene::CameraModel& cam, cv::Vec3d rvec, cv::Vec
                 const double u = rot(0, 0) * p[0] + rot(1, 0) * p[1] + rot(2, 0) * p[2];
                 const double v = rot(0, 1) * p[0] + rot(1, 1) * p[1] + rot(2, 1) * p[2];
                 // Board: squares of 4 mm from (-4, -4) to (36, 24): corners at (0..32, 0..20).
-                const int i = static_cast<int>(std::floor(u / 4)) + 1, j = static_cast<int>(std::floor(v / 4)) + 1;
+                const int i = static_cast<int>(std::floor(u / 4)) + 1,
+                          j = static_cast<int>(std::floor(v / 4)) + 1;
                 double level = 0.85;
-                if (i >= 0 && i < 10 && j >= 0 && j < 7) level = (i + j) % 2 ? 0.9 : 0.1;
-                else if (i < -1 || i > 10 || j < -1 || j > 7) level = 0.5;
+                if (i >= 0 && i < 10 && j >= 0 && j < 7)
+                    level = (i + j) % 2 ? 0.9 : 0.1;
+                else if (i < -1 || i > 10 || j < -1 || j > 7)
+                    level = 0.5;
                 acc += level;
             }
             img.at<std::uint8_t>(y, x) = cv::saturate_cast<std::uint8_t>(acc / 4 * 255);
@@ -98,8 +102,9 @@ protected:
         for (const char* d : {"white", "chart", "marker", "chess"}) fs::create_directories(dir / d);
         std::string error;
         scene::SceneRenderer white;
-        ASSERT_TRUE(white.init(scenario_or_fail("frames: 2\nlight: 0.7\ntarget: {kind: white, distances_mm: 40}\n"), 26,
-                               error))
+        ASSERT_TRUE(white.init(
+            scenario_or_fail("frames: 2\nlight: 0.7\ntarget: {kind: white, distances_mm: 40}\n"),
+            26, error))
             << error;
         cam = white.camera();
         scene::Image img;
@@ -109,9 +114,10 @@ protected:
             save(dir / "white" / ("white" + std::to_string(i) + ".png"), img);
         }
         scene::SceneRenderer chart;
-        ASSERT_TRUE(chart.init(scenario_or_fail("frames: 6\nlight: 0.9\ntarget: {kind: squares, pitch_mm: 8, size_mm: "
-                                                "4, cols: 15, rows: 13, distances_mm: [50, 40, 60, 70, 80, 90]}\n"),
-                               23, error))
+        ASSERT_TRUE(chart.init(
+            scenario_or_fail("frames: 6\nlight: 0.9\ntarget: {kind: squares, pitch_mm: 8, size_mm: "
+                             "4, cols: 15, rows: 13, distances_mm: [50, 40, 60, 70, 80, 90]}\n"),
+            23, error))
             << error;
         for (int i = 0; i < chart.frames(); ++i) {
             chart.render(i, img, truth);
@@ -120,9 +126,10 @@ protected:
             save(dir / "chart" / name, img);
         }
         scene::SceneRenderer marker;
-        ASSERT_TRUE(marker.init(scenario_or_fail("frames: 6\nlight: 1.0\ntarget: {kind: two_dot, dot_mm: 3, "
-                                                 "separation_mm: 10, distances_mm: [30, 50, 70, 80, 120, 200]}\n"),
-                                33, error))
+        ASSERT_TRUE(marker.init(
+            scenario_or_fail("frames: 6\nlight: 1.0\ntarget: {kind: two_dot, dot_mm: 3, "
+                             "separation_mm: 10, distances_mm: [30, 50, 70, 80, 120, 200]}\n"),
+            33, error))
             << error;
         for (int i = 0; i < marker.frames(); ++i) {
             marker.render(i, img, truth);
@@ -130,10 +137,11 @@ protected:
             std::snprintf(name, sizeof name, "marker_%03.0fmm.png", truth.target.distance_mm);
             save(dir / "marker" / name, img);
         }
-        const double poses[8][6] = {{0.45, 0, 0, -16, -10, 62},    {-0.45, 0.1, 0.1, -16, -10, 64},
-                                    {0, 0.45, -0.1, -16, -10, 60},  {0.1, -0.45, 0.2, -16, -10, 66},
-                                    {0.35, 0.35, 0.3, -16, -10, 68}, {-0.35, -0.35, -0.2, -16, -10, 63},
-                                    {0.35, -0.35, 0.5, -16, -10, 66}, {-0.35, 0.35, -0.5, -16, -10, 66}};
+        const double poses[8][6] = {
+            {0.45, 0, 0, -16, -10, 62},       {-0.45, 0.1, 0.1, -16, -10, 64},
+            {0, 0.45, -0.1, -16, -10, 60},    {0.1, -0.45, 0.2, -16, -10, 66},
+            {0.35, 0.35, 0.3, -16, -10, 68},  {-0.35, -0.35, -0.2, -16, -10, 63},
+            {0.35, -0.35, 0.5, -16, -10, 66}, {-0.35, 0.35, -0.5, -16, -10, 66}};
         for (int i = 0; i < 8; ++i)
             cv::imwrite((dir / "chess" / ("view" + std::to_string(i) + ".png")).string(),
                         render_chessboard(cam, {poses[i][0], poses[i][1], poses[i][2]},
@@ -148,9 +156,10 @@ protected:
 // book's circle, polynomial and separation table; the comparison is printed.
 TEST_F(CalibrateCommand, BothMethodsOnTheSimulatedScope) {
     const fs::path out = dir / "scope1.json";
-    const CommandRun r = run("--images " + d("chess") + " --target chessboard:9x6 --spacing 4 --white " + d("white") +
-                      " --chart " + d("chart") + " --marker " + d("marker") + " --out " + out.string() +
-                      " --scope sim-scope-1");
+    const CommandRun r =
+        run("--images " + d("chess") + " --target chessboard:9x6 --spacing 4 --white " +
+            d("white") + " --chart " + d("chart") + " --marker " + d("marker") + " --out " +
+            out.string() + " --scope sim-scope-1");
     std::printf("%s", r.out.c_str());
     ASSERT_EQ(r.rc, 0) << r.out;
     Calibration c;
@@ -170,7 +179,8 @@ TEST_F(CalibrateCommand, BothMethodsOnTheSimulatedScope) {
     EXPECT_NEAR(c.book->cy, cam.cy, 1.0);
     ASSERT_TRUE(c.separation.has_value());
     EXPECT_EQ(c.separation->distances_mm, (std::vector<double>{30, 50, 70, 80, 120, 200}));
-    for (const char* s : {"table 2.3", "comparison (book vs OpenCV pinhole)", "reprojection RMS on the 8 target views",
+    for (const char* s : {"table 2.3", "comparison (book vs OpenCV pinhole)",
+                          "reprojection RMS on the 8 target views",
                           "mean distance error on 6 chart images", "separation: 70.0 mm"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s;
 }
@@ -178,8 +188,9 @@ TEST_F(CalibrateCommand, BothMethodsOnTheSimulatedScope) {
 // The book's model alone from the square chart: centre and focal length of the sim.
 TEST_F(CalibrateCommand, BookModelFromTheSquareChart) {
     const fs::path out = dir / "book.json";
-    const CommandRun r = run("--images " + d("chart") + " --target squares --spacing 8 --model book --white " + d("white") +
-                      " --out " + out.string());
+    const CommandRun r =
+        run("--images " + d("chart") + " --target squares --spacing 8 --model book --white " +
+            d("white") + " --out " + out.string());
     ASSERT_EQ(r.rc, 0) << r.out;
     Calibration c;
     std::string error;
@@ -218,7 +229,9 @@ TEST_F(CalibrateCommand, BadInputLeavesThePreviousFile) {
     fs::copy_file(dir / "chess" / "view1.png", few + "/b.png");
     // Mixed sizes.
     const std::string mixed = fresh("mixed");
-    for (int i = 0; i < 4; ++i) fs::copy_file(dir / "chess" / ("view" + std::to_string(i) + ".png"), mixed + "/" + std::to_string(i) + ".png");
+    for (int i = 0; i < 4; ++i)
+        fs::copy_file(dir / "chess" / ("view" + std::to_string(i) + ".png"),
+                      mixed + "/" + std::to_string(i) + ".png");
     cv::imwrite(mixed + "/9small.png", cv::Mat(240, 320, CV_8UC1, cv::Scalar(128)));
     const std::string o = " --out " + out.string();
     const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
@@ -228,17 +241,21 @@ TEST_F(CalibrateCommand, BadInputLeavesThePreviousFile) {
          {"050mm.png", "grid not found"}},
         {"--images " + few + " --target chessboard:9x6" + o, {"too few views", "2 image(s)"}},
         {"--images " + mixed + " --target chessboard:9x6" + o, {"9small.png", "mixed sizes"}},
-        {"--images " + d("chess") + " --target chessboard:9x6 --order 4 --model book --white " + d("white") + o,
+        {"--images " + d("chess") + " --target chessboard:9x6 --order 4 --model book --white " +
+             d("white") + o,
          {"--order"}},
         {"--images " + d("chess") + " --target chessboard:9x6", {"give --out"}},
-        {"--images " + dir.string() + "/none --target chessboard:9x6" + o, {"/none", "cannot read the folder"}},
-        {"--images " + d("chess") + " --target chessboard:9x6 --bogus 1" + o, {"unknown option '--bogus'"}},
+        {"--images " + dir.string() + "/none --target chessboard:9x6" + o,
+         {"/none", "cannot read the folder"}},
+        {"--images " + d("chess") + " --target chessboard:9x6 --bogus 1" + o,
+         {"unknown option '--bogus'"}},
         {"--images " + d("chart") + " --target squares --model pinhole" + o, {"--model book"}},
     };
     for (const auto& [args, what] : cases) {
         const CommandRun r = run(args);
         EXPECT_EQ(r.rc, 2) << args << "\n" << r.out;
-        for (const std::string& w : what) EXPECT_NE(r.out.find(w), std::string::npos) << w << " in:\n" << r.out;
+        for (const std::string& w : what)
+            EXPECT_NE(r.out.find(w), std::string::npos) << w << " in:\n" << r.out;
         EXPECT_EQ(read(out), previous) << args;
     }
 }
@@ -247,9 +264,11 @@ TEST_F(CalibrateCommand, BadInputLeavesThePreviousFile) {
 // RMS <= 0.5 px with all 11 frames (the "3,1" layout's refusal: zhang_test.cpp).
 TEST_F(CalibrateCommand, EndocalGrid) {
     const std::string data = shared_data("endocal/sample_001");
-    if (!fs::is_directory(data)) GTEST_SKIP() << "no real data at " << data << " (../shared/data absent)";
+    if (!fs::is_directory(data))
+        GTEST_SKIP() << "no real data at " << data << " (../shared/data absent)";
     const fs::path out = dir / "endocal.json";
-    CommandRun r = run("--images " + data + " --target asymmetric-circles:3x11 --spacing 2,1 --out " + out.string());
+    CommandRun r = run("--images " + data +
+                       " --target asymmetric-circles:3x11 --spacing 2,1 --out " + out.string());
     ASSERT_EQ(r.rc, 0) << r.out;
     Calibration c;
     std::string error;
@@ -266,7 +285,8 @@ TEST_F(CalibrateCommand, SimRecordsTheCalibrationInTheTrace) {
     const fs::path frames = dir / "simin";
     fs::create_directories(frames);
     for (int i = 0; i < 6; ++i)
-        fs::copy_file(dir / "white" / ("white" + std::to_string(i % 2) + ".png"), frames / ("00000" + std::to_string(i) + ".png"),
+        fs::copy_file(dir / "white" / ("white" + std::to_string(i % 2) + ".png"),
+                      frames / ("00000" + std::to_string(i) + ".png"),
                       fs::copy_options::overwrite_existing);
     Calibration c;
     c.scope = "sim-scope-2";
@@ -282,15 +302,17 @@ TEST_F(CalibrateCommand, SimRecordsTheCalibrationInTheTrace) {
         const fs::path board = dir / "board.yaml";
         std::ofstream(board) << "board: t\ncalibration: board_cal.json\nanalysis: {stage: none}\n";
         const fs::path trace = dir / "trace.jsonl";
-        const std::string cmd = std::string(ENDOTOWER_BINARY) + " sim --board " + board.string() + " --input " +
-                                frames.string() + " --frames " + (dir / "simout").string() + " --trace " + trace.string() +
+        const std::string cmd = std::string(ENDOTOWER_BINARY) + " sim --board " + board.string() +
+                                " --input " + frames.string() + " --frames " +
+                                (dir / "simout").string() + " --trace " + trace.string() +
                                 " > /dev/null 2>&1";
         ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
         std::ifstream in(trace);
         std::string line;
         int lines = 0, with = 0;
-        const std::string expect = "\"calibration\":{\"file\":\"" + cal.string() + "\",\"scope\":\"sim-scope-2\",\"hash\":\"" +
-                                   content_hash(text) + "\",\"fov\":\"" + (offset == 0 ? "ok" : "shifted") + "\"";
+        const std::string expect = "\"calibration\":{\"file\":\"" + cal.string() +
+                                   "\",\"scope\":\"sim-scope-2\",\"hash\":\"" + content_hash(text) +
+                                   "\",\"fov\":\"" + (offset == 0 ? "ok" : "shifted") + "\"";
         while (std::getline(in, line)) {
             ++lines;
             with += line.find(expect) != std::string::npos;
@@ -300,8 +322,9 @@ TEST_F(CalibrateCommand, SimRecordsTheCalibrationInTheTrace) {
         EXPECT_GE(with, lines - 2) << expect << "\nlast line: " << line;
     }
     std::ofstream(dir / "board_cal.json") << "{\"fx\": 1}";
-    const std::string cmd = std::string(ENDOTOWER_BINARY) + " sim --board " + (dir / "board.yaml").string() + " --input " +
-                            frames.string() + " --frames " + (dir / "simout").string() + " > /dev/null 2>&1";
+    const std::string cmd = std::string(ENDOTOWER_BINARY) + " sim --board " +
+                            (dir / "board.yaml").string() + " --input " + frames.string() +
+                            " --frames " + (dir / "simout").string() + " > /dev/null 2>&1";
     const int status = std::system(cmd.c_str());
     EXPECT_EQ(WEXITSTATUS(status), 2);
 }

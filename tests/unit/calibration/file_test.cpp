@@ -113,7 +113,8 @@ target: {kind: squares, pitch_mm: 8, size_mm: 4, cols: 15, rows: 13, distances_m
     c.book = RadialPolynomial{c.distortion, cam.cx, cam.cy};
     Undistorter u;
     ASSERT_TRUE(u.init(c, error)) << error;
-    for (const auto [x, y] : std::vector<std::pair<double, double>>{{10, 10}, {320, 240}, {600, 100}, {150, 420}}) {
+    for (const auto [x, y] :
+         std::vector<std::pair<double, double>>{{10, 10}, {320, 240}, {600, 100}, {150, 420}}) {
         double xd, yd;
         cam.distort(x, y, xd, yd);
         const Point2 s = u.source_of(x, y);
@@ -138,7 +139,8 @@ target: {kind: squares, pitch_mm: 8, size_mm: 4, cols: 15, rows: 13, distances_m
     int matched = 0;
     for (const Point2& p : centres) {
         double best = 1e9;
-        for (const scene::Px& t : truth.target.points_px_u) best = std::min(best, std::hypot(t.x - p.x, t.y - p.y));
+        for (const scene::Px& t : truth.target.points_px_u)
+            best = std::min(best, std::hypot(t.x - p.x, t.y - p.y));
         // Squares cut by the corrected image's edge or the circle have biased centroids.
         double xd, yd;
         cam.distort(p.x, p.y, xd, yd);
@@ -151,40 +153,53 @@ target: {kind: squares, pitch_mm: 8, size_mm: 4, cols: 15, rows: 13, distances_m
 }
 
 // The remap samples bilinearly at the map's source (fixed point: within 2 levels on
-// a smooth ramp), and pixels whose source is outside the field of view are black.
+// a smooth ramp, every channel; gray, BGR and BGRA take different code paths), and
+// pixels whose source is outside the field of view are black.
 TEST(Undistorter, PinholeRemapMatchesTheExactMap) {
     Calibration c = sample();
     c.model = LensModel::kPinhole;
     Undistorter u;
     std::string error;
     ASSERT_TRUE(u.init(c, error)) << error;
-    std::vector<std::uint8_t> in(c.width * c.height), out(in.size());
-    for (int y = 0; y < c.height; ++y)
-        for (int x = 0; x < c.width; ++x) in[y * c.width + x] = static_cast<std::uint8_t>((x + y) / 6);
-    hal::Frame fi, fo;
-    fi.format = fo.format = {c.width, c.height, c.width, hal::PixelFormat::kGray8};
-    fi.data = in.data();
-    fo.data = out.data();
-    ASSERT_TRUE(u.apply(fi, fo));
-    int checked = 0, black = 0;
-    for (int y = 5; y < c.height; y += 37)
-        for (int x = 5; x < c.width; x += 41) {
-            const Point2 s = u.source_of(x, y);
-            const int got = out[y * c.width + x];
-            if (!c.fov.contains(s.x, s.y)) {
-                EXPECT_EQ(got, 0);
-                ++black;
-                continue;
+    for (const auto [fmt, channels] : std::vector<std::pair<hal::PixelFormat, int>>{
+             {hal::PixelFormat::kGray8, 1}, {hal::PixelFormat::kBgr24, 3}, {hal::PixelFormat::kBgra32, 4}}) {
+        const int stride = c.width * channels + 8;  // padded rows
+        std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height), out(in.size(), 77);
+        auto level = [](double x, double y, int ch) { return (x + y) / 8.0 + 15 * ch; };
+        for (int y = 0; y < c.height; ++y)
+            for (int x = 0; x < c.width; ++x)
+                for (int ch = 0; ch < channels; ++ch)
+                    in[y * stride + x * channels + ch] = static_cast<std::uint8_t>(level(x, y, ch));
+        hal::Frame fi, fo;
+        fi.format = fo.format = {c.width, c.height, stride, fmt};
+        fi.data = in.data();
+        fo.data = out.data();
+        ASSERT_TRUE(u.apply(fi, fo));
+        int checked = 0, black = 0;
+        for (int y = 0; y < c.height; y += 7)
+            for (int x = 0; x < c.width; x += 5) {
+                const Point2 s = u.source_of(x, y);
+                for (int ch = 0; ch < channels; ++ch) {
+                    const int got = out[y * stride + x * channels + ch];
+                    if (!c.fov.contains(s.x, s.y)) {
+                        EXPECT_EQ(got, 0) << x << ", " << y;
+                        black += ch == 0;
+                        continue;
+                    }
+                    if (s.x < 1 || s.y < 1 || s.x > c.width - 2 || s.y > c.height - 2) continue;
+                    EXPECT_NEAR(got, level(s.x, s.y, ch), 2.0) << x << ", " << y << " channel " << ch;
+                    checked += ch == 0;
+                }
             }
-            if (s.x < 1 || s.y < 1 || s.x > c.width - 2 || s.y > c.height - 2) continue;
-            EXPECT_NEAR(got, (s.x + s.y) / 6.0, 2.0) << x << ", " << y;
-            ++checked;
-        }
-    EXPECT_GT(checked, 100);
-    EXPECT_GT(black, 10);
-    hal::Frame wrong = fo;
-    wrong.format.width = 100;
-    EXPECT_FALSE(u.apply(fi, wrong));
+        EXPECT_GT(checked, 1000) << channels;
+        EXPECT_GT(black, 100) << channels;
+    }
+    hal::Frame a, b;
+    std::vector<std::uint8_t> buf(c.width * c.height * 3);
+    a.format = b.format = {c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
+    a.data = b.data = buf.data();
+    b.format.width = 100;
+    EXPECT_FALSE(u.apply(a, b));
 }
 
 TEST(Undistorter, FoldingBookPolynomialIsRefused) {
@@ -228,7 +243,8 @@ target: {kind: white, distances_mm: 40}
     EXPECT_GE(check.rays, 60);
     auto transformed = [&](const cv::Matx23d& m) {
         cv::Mat moved;
-        cv::warpAffine(frame, moved, m, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+        cv::warpAffine(frame, moved, m, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+                       cv::Scalar::all(0));
         hal::Frame mf = f;
         mf.data = moved.data;
         return monitor.check(mf);
@@ -250,7 +266,8 @@ target: {kind: white, distances_mm: 40}
 // full detection within 1 px.
 TEST(FovMonitor, RealFrameAgreesWithTheDetection) {
     const std::string path = shared_data("endoseg_fov/demo.jpg");
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << "no real data at " << path << " (../shared/data absent)";
+    if (!std::filesystem::exists(path))
+        GTEST_SKIP() << "no real data at " << path << " (../shared/data absent)";
     GrayImage g;
     std::string error;
     ASSERT_TRUE(load_gray_image(path, g, error)) << error;

@@ -22,8 +22,8 @@ struct Detected {
 
 // Detects `target` (with `spacing`) in the images of `dir` whose names start with
 // `prefix`; cached, the detections are the slow part.
-const Detected& detect_all(const std::string& dir, const std::string& prefix, const std::string& target,
-                           const std::string& spacing) {
+const Detected& detect_all(const std::string& dir, const std::string& prefix,
+                           const std::string& target, const std::string& spacing) {
     static std::map<std::string, Detected> cache;
     const std::string key = dir + "|" + prefix + "|" + target + "|" + spacing;
     if (auto it = cache.find(key); it != cache.end()) return it->second;
@@ -45,8 +45,9 @@ const Detected& detect_all(const std::string& dir, const std::string& prefix, co
     return cache[key] = d;
 }
 
-#define SKIP_WITHOUT(dir) \
-    if (!std::filesystem::is_directory(dir)) GTEST_SKIP() << "no real data at " << dir << " (../shared/data absent)"
+#define SKIP_WITHOUT(dir)                    \
+    if (!std::filesystem::is_directory(dir)) \
+    GTEST_SKIP() << "no real data at " << dir << " (../shared/data absent)"
 
 // OpenCV's sample chessboards: RMS <= 0.5 px, pinhole and fisheye. left02 is the view
 // OpenCV's own left_intrinsics.yml lists at 1.18 px (the others about 0.2 px): it is
@@ -60,8 +61,8 @@ TEST(ZhangCalibration, OpenCvSampleChessboardsBelowHalfPixel) {
         ZhangResult r;
         std::string error;
         ASSERT_TRUE(calibrate_zhang(d.views, d.width, d.height, m, r, error)) << error;
-        std::printf("%s: RMS %.4f px, fx %.2f fy %.2f cx %.2f cy %.2f, spacing error %.4f mm\n", to_string(m), r.rms,
-                    r.fx, r.fy, r.cx, r.cy, r.spacing_error);
+        std::printf("%s: RMS %.4f px, fx %.2f fy %.2f cx %.2f cy %.2f, spacing error %.4f mm\n",
+                    to_string(m), r.rms, r.fx, r.fy, r.cx, r.cy, r.spacing_error);
         EXPECT_LE(r.rms, 0.5);
         ASSERT_EQ(r.dropped.size(), 1u);
         EXPECT_EQ(r.dropped[0].name, "left02.jpg");
@@ -85,7 +86,8 @@ TEST(ZhangCalibration, EndocalReproducesTheReferenceCalibration) {
     const std::vector<View> ten(d.views.begin(), d.views.begin() + 10);
     ZhangResult r;
     std::string error;
-    ASSERT_TRUE(calibrate_zhang(ten, d.width, d.height, LensModel::kPinhole, r, error, {.zero_tangent = true}))
+    ASSERT_TRUE(calibrate_zhang(ten, d.width, d.height, LensModel::kPinhole, r, error,
+                                {.zero_tangent = true}))
         << error;
     EXPECT_TRUE(r.dropped.empty());
     EXPECT_NEAR(r.rms, 0.284, 0.001);
@@ -98,7 +100,8 @@ TEST(ZhangCalibration, EndocalReproducesTheReferenceCalibration) {
     EXPECT_NEAR(r.distortion[1], 0.347, 0.001);
     EXPECT_NEAR(r.distortion[4], -0.145, 0.001);
     // All eleven frames, default model: below 0.5 px, nothing to drop.
-    ASSERT_TRUE(calibrate_zhang(d.views, d.width, d.height, LensModel::kPinhole, r, error)) << error;
+    ASSERT_TRUE(calibrate_zhang(d.views, d.width, d.height, LensModel::kPinhole, r, error))
+        << error;
     std::printf("endocal, 11 frames: RMS %.4f px, fx %.2f fy %.2f\n", r.rms, r.fx, r.fy);
     EXPECT_LE(r.rms, 0.5);
     EXPECT_TRUE(r.dropped.empty());
@@ -145,7 +148,8 @@ TEST(ZhangCalibration, InconsistentDetectionIsDroppedAndNamed) {
     std::vector<View> clean = d.views;
     clean.erase(clean.begin() + 5);
     ZhangResult ref;
-    ASSERT_TRUE(calibrate_zhang(clean, d.width, d.height, LensModel::kPinhole, ref, error)) << error;
+    ASSERT_TRUE(calibrate_zhang(clean, d.width, d.height, LensModel::kPinhole, ref, error))
+        << error;
     EXPECT_NEAR(r.rms, ref.rms, 1e-4);
     EXPECT_NEAR(r.fx, ref.fx, 0.01);
 }
@@ -162,7 +166,7 @@ TEST(ZhangCalibration, CharucoOnRenderedViews) {
     const double px_per_mm = 5;  // board image: 140 x 100 mm at 5 px/mm, 10 mm margin
     board->draw(cv::Size(140 * 5 + 100, 100 * 5 + 100), art, 50, 1);
     const cv::Matx33d k(800, 0, 330, 0, 790, 245, 0, 0, 1);
-    const double poses[8][6] = {{0.5, 0, 0, -70, -50, 320},    {-0.5, 0.1, 0.1, -70, -50, 330},
+    const double poses[8][6] = {{0.5, 0, 0, -70, -50, 320},      {-0.5, 0.1, 0.1, -70, -50, 330},
                                 {0, 0.5, -0.1, -60, -50, 300},   {0.1, -0.5, 0.2, -80, -40, 340},
                                 {0.4, 0.4, 0.3, -60, -60, 350},  {-0.4, -0.4, -0.2, -70, -50, 310},
                                 {0.4, -0.4, 0.5, -70, -50, 330}, {-0.4, 0.4, -0.5, -70, -50, 330}};
@@ -171,20 +175,23 @@ TEST(ZhangCalibration, CharucoOnRenderedViews) {
         cv::Matx33d rot;
         cv::Rodrigues(cv::Vec3d(poses[i][0], poses[i][1], poses[i][2]), rot);
         // Board mm -> camera; art pixel (u, v) -> board mm ((u - 50) / 5, (v - 50) / 5).
-        const cv::Matx33d rt(rot(0, 0), rot(0, 1), poses[i][3], rot(1, 0), rot(1, 1), poses[i][4], rot(2, 0), rot(2, 1),
-                             poses[i][5]);
-        const cv::Matx33d art_to_mm(1 / px_per_mm, 0, -50 / px_per_mm, 0, 1 / px_per_mm, -50 / px_per_mm, 0, 0, 1);
+        const cv::Matx33d rt(rot(0, 0), rot(0, 1), poses[i][3], rot(1, 0), rot(1, 1), poses[i][4],
+                             rot(2, 0), rot(2, 1), poses[i][5]);
+        const cv::Matx33d art_to_mm(1 / px_per_mm, 0, -50 / px_per_mm, 0, 1 / px_per_mm,
+                                    -50 / px_per_mm, 0, 0, 1);
         cv::Mat img;
-        cv::warpPerspective(art, img, cv::Mat(k * rt * art_to_mm), cv::Size(640, 480), cv::INTER_AREA,
-                            cv::BORDER_CONSTANT, 255);
-        GrayImage g{640, 480, std::vector<std::uint8_t>(img.datastart, img.dataend), "view" + std::to_string(i)};
+        cv::warpPerspective(art, img, cv::Mat(k * rt * art_to_mm), cv::Size(640, 480),
+                            cv::INTER_AREA, cv::BORDER_CONSTANT, 255);
+        GrayImage g{640, 480, std::vector<std::uint8_t>(img.datastart, img.dataend),
+                    "view" + std::to_string(i)};
         View v;
         ASSERT_TRUE(detect_target(g, spec, v, error)) << error;
         views.push_back(v);
     }
     ZhangResult r;
     ASSERT_TRUE(calibrate_zhang(views, 640, 480, LensModel::kPinhole, r, error)) << error;
-    std::printf("charuco: RMS %.3f fx %.2f fy %.2f cx %.2f cy %.2f dropped %zu\n", r.rms, r.fx, r.fy, r.cx, r.cy, r.dropped.size());
+    std::printf("charuco: RMS %.3f fx %.2f fy %.2f cx %.2f cy %.2f dropped %zu\n", r.rms, r.fx,
+                r.fy, r.cx, r.cy, r.dropped.size());
     EXPECT_LE(r.rms, 0.5);
     EXPECT_NEAR(r.fx, 800, 8);
     EXPECT_NEAR(r.fy, 790, 7.9);
@@ -206,7 +213,8 @@ TEST(ZhangCalibration, TargetParsing) {
     EXPECT_EQ(t.spacing_b, 20);
     ASSERT_TRUE(parse_target("circles:4x11", "", t, error)) << error;
     EXPECT_EQ(t.spacing_a, 1);
-    for (const auto& [target, spacing, what] : std::vector<std::tuple<std::string, std::string, std::string>>{
+    for (const auto& [target, spacing, what] :
+         std::vector<std::tuple<std::string, std::string, std::string>>{
              {"chessboard", "", "COLSxROWS"},
              {"chessboard:9x", "", "COLSxROWS"},
              {"chessboard:9x6x", "", "COLSxROWS"},
@@ -239,7 +247,8 @@ TEST(ZhangCalibration, GridNotFoundNamesTheImage) {
     ASSERT_TRUE(parse_target("chessboard:9x6", "", spec, error));
     View v;
     EXPECT_FALSE(detect_target(blank, spec, v, error));
-    EXPECT_NE(error.find("blank.png: grid not found (9x6 inner corners)"), std::string::npos) << error;
+    EXPECT_NE(error.find("blank.png: grid not found (9x6 inner corners)"), std::string::npos)
+        << error;
 }
 
 }  // namespace

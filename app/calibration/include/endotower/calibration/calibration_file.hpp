@@ -26,8 +26,8 @@ struct Calibration {
     double fx = 0, fy = 0, cx = 0, cy = 0;
     std::vector<double> distortion;
     double rms = 0;
-    FovCircle fov;                          // radius 0: not measured
-    std::optional<RadialPolynomial> book;   // the book's radial polynomial
+    FovCircle fov;                         // radius 0: not measured
+    std::optional<RadialPolynomial> book;  // the book's radial polynomial
     std::optional<SeparationTable> separation;
 };
 

@@ -15,10 +15,10 @@
 namespace endotower::calibration {
 
 struct FovMonitorParams {
-    double shift_tolerance_px = 3.0;     // centre moved further: kShifted
-    double radius_tolerance = 0.03;      // radius changed by more (fraction): kScopeChanged
-    int min_edge_contrast = 15;          // 8-bit levels between disc and surround on a ray
-    int min_rays = 16;                   // fewer usable rays: kUnknown (e.g. dark scene)
+    double shift_tolerance_px = 3.0;  // centre moved further: kShifted
+    double radius_tolerance = 0.03;   // radius changed by more (fraction): kScopeChanged
+    int min_edge_contrast = 15;       // 8-bit levels between disc and surround on a ray
+    int min_rays = 16;                // fewer usable rays: kUnknown (e.g. dark scene)
 };
 
 enum class FovStatus { kOk, kShifted, kScopeChanged, kUnknown };

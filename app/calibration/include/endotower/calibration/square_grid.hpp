@@ -25,9 +25,9 @@ bool detect_square_centres(const GrayImage& image, const FovCircle& fov, std::ve
 //   p(i, j) = origin + i u + j v,  i, j in -1..1 (u along the image's x, v along y).
 struct CentreSquares {
     Point2 origin, u, v;
-    double dx = 0, dy = 0;      // |u|, |v|: centre-to-centre distances, px
-    double sx_over_sy = 1;      // eq. 2.4: Dx / Dy
-    double max_offset_px = 0;   // largest distance of the nine from the lattice
+    double dx = 0, dy = 0;     // |u|, |v|: centre-to-centre distances, px
+    double sx_over_sy = 1;     // eq. 2.4: Dx / Dy
+    double max_offset_px = 0;  // largest distance of the nine from the lattice
 };
 bool find_centre_squares(const std::vector<Point2>& centres, Point2 centre, CentreSquares& out,
                          std::string& error);
@@ -44,8 +44,9 @@ inline double distance_from_spacing(double d_px, double pitch_mm, double focal_p
 // strong barrel distortion at the rim does not confuse neighbours) and returns one
 // sample per square: actual radius |p(i,j) - c| and dr = actual - measured radius.
 // `measured` receives the matching measured centres (same order).
-std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres, const CentreSquares& grid,
-                                         Point2 c, std::vector<Point2>* measured = nullptr,
+std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres,
+                                         const CentreSquares& grid, Point2 c,
+                                         std::vector<Point2>* measured = nullptr,
                                          std::vector<Point2>* actual = nullptr);
 
 // The radial fit of one chart image about the centre that minimises the book's total
@@ -54,12 +55,12 @@ std::vector<RadialSample> radial_samples(const std::vector<Point2>& centres, con
 // `search_px` of `start` (1 px grid, then 0.05 px). False with `error` as
 // fit_radial_polynomial, or when fewer than `order` + 1 squares were indexed.
 struct BookDistortion {
-    RadialFit fit;                 // poly.cx, poly.cy: the centre found
+    RadialFit fit;  // poly.cx, poly.cy: the centre found
     std::vector<RadialSample> samples;
     std::vector<Point2> measured, actual;  // per sample
 };
-bool fit_book_distortion(const std::vector<Point2>& centres, const CentreSquares& grid, Point2 start,
-                         double search_px, int order, double r_max, BookDistortion& out,
-                         std::string& error);
+bool fit_book_distortion(const std::vector<Point2>& centres, const CentreSquares& grid,
+                         Point2 start, double search_px, int order, double r_max,
+                         BookDistortion& out, std::string& error);
 
 }  // namespace endotower::calibration
