@@ -1,5 +1,6 @@
 #include "endotower/calibration/fov_monitor.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace endotower::calibration {
@@ -63,7 +64,8 @@ FovMonitor::FovMonitor(const FovCircle& reference, FovMonitorParams params)
 FovCheck FovMonitor::check(const hal::Frame& frame) {
     FovCheck out;
     if (!ref_.valid() || frame.data == nullptr) return out;
-    const int r_in = static_cast<int>(0.95 * ref_.radius),
+    const int r_near = static_cast<int>(0.95 * ref_.radius),
+              r_in = static_cast<int>(0.7 * ref_.radius),
               r_max = static_cast<int>(1.3 * ref_.radius);
     const int w = frame.format.width, h = frame.format.height;
     int n = 0;
@@ -81,13 +83,22 @@ FovCheck FovMonitor::check(const hal::Frame& frame) {
                              std::lround(ref_.cy + r1 * sin_[i]) >= h))
             --r1;
         if (r1 < ref_.radius + 3) continue;
-        const int inside = at(r_in), outside = at(r1);
-        if (inside - outside < params_.min_edge_contrast) continue;  // dark tissue at the rim
+        // The disc's level just inside the calibrated rim; deeper in (0.7 R) when that is
+        // dark: a smaller circle (another scope), or dark tissue at the rim.
+        // The surround must be dark against the disc (under a third of its level), so
+        // vignetting inside the disc is never taken for the rim.
+        const int outside = at(r1);
+        auto usable = [&](int in) {
+            return in - outside >= params_.min_edge_contrast && 3 * outside < in;
+        };
+        int inside = at(r_near), r_stop = r_near;
+        if (!usable(inside)) inside = at(r_in), r_stop = r_in;
+        if (!usable(inside)) continue;
         // Inwards from the dark surround to the first lit sample: the rim, not an
         // edge in the scene inside it.
         const double mid = 0.5 * (inside + outside);
         int prev = outside;
-        for (int r = r1 - 1; r >= r_in; --r) {
+        for (int r = r1 - 1; r >= r_stop; --r) {
             const int v = at(r);
             if (v >= mid) {
                 const double rr = r + (v - mid) / static_cast<double>(v - prev);
@@ -99,13 +110,20 @@ FovCheck FovMonitor::check(const hal::Frame& frame) {
             prev = v;
         }
     }
-    // One pass of outlier removal: rays whose edge is off the fitted circle by > 3 px.
-    if (n >= params_.min_rays && fit_circle(xs_.data(), ys_.data(), n, out.circle) >= 0) {
+    // Outliers (an edge in the scene, not the rim): refit without the rays off the
+    // circle by more than max(3 px, 3x the median residual), three times.
+    for (int pass = 0; pass < 3 && n >= params_.min_rays; ++pass) {
+        if (fit_circle(xs_.data(), ys_.data(), n, out.circle) < 0) break;
+        for (int i = 0; i < n; ++i)
+            res_[i] = std::abs(std::hypot(xs_[i] - out.circle.cx, ys_[i] - out.circle.cy) -
+                               out.circle.radius);
+        std::array<double, kRays> sorted = res_;
+        std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
+        const double limit = std::max(3.0, 3.0 * sorted[n / 2]);
         int m = 0;
         for (int i = 0; i < n; ++i)
-            if (std::abs(std::hypot(xs_[i] - out.circle.cx, ys_[i] - out.circle.cy) -
-                         out.circle.radius) <= 3.0)
-                xs_[m] = xs_[i], ys_[m] = ys_[i], ++m;
+            if (res_[i] <= limit) xs_[m] = xs_[i], ys_[m] = ys_[i], ++m;
+        if (m == n) break;
         n = m;
     }
     out.rays = n;

@@ -42,22 +42,25 @@ int remap_run_sse2(const Undistorter::Impl&, const hal::Frame& in, const cv::Vec
                 const short a = static_cast<short>(32 - f), b = static_cast<short>(f);
                 wx[f] = C == 3 ? _mm_setr_epi16(a, a, a, b, b, b, 0, 0)
                                : _mm_setr_epi16(a, a, a, a, b, b, b, b);
-                wy[f] = _mm_set1_epi32(static_cast<int>((static_cast<unsigned>(f) << 16) | (32u - f)));
+                wy[f] =
+                    _mm_set1_epi32(static_cast<int>((static_cast<unsigned>(f) << 16) | (32u - f)));
             }
         }
     };
     static const Tables t;
     const std::size_t ss = in.format.stride;
     const std::uint8_t* src = in.data;
-    const std::uint8_t* end = src + (in.format.height - 1) * ss + static_cast<std::size_t>(C) * in.format.width;
+    const std::uint8_t* end =
+        src + (in.format.height - 1) * ss + static_cast<std::size_t>(C) * in.format.width;
     const __m128i zero = _mm_setzero_si128(), round = _mm_set1_epi32(512);
     for (; x < x1; ++x) {
-        const std::uint8_t* p = src + static_cast<std::size_t>(xy[x][1]) * ss +
-                                static_cast<std::size_t>(xy[x][0]) * C;
+        const std::uint8_t* p =
+            src + static_cast<std::size_t>(xy[x][1]) * ss + static_cast<std::size_t>(xy[x][0]) * C;
         if (p + ss + 8 > end) break;
         const int fx = fr[x] & 31, fy = fr[x] >> 5;
         __m128i top = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
-        __m128i bot = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + ss)), zero);
+        __m128i bot =
+            _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + ss)), zero);
         top = _mm_mullo_epi16(top, t.wx[fx]);
         bot = _mm_mullo_epi16(bot, t.wx[fx]);
         top = _mm_add_epi16(top, _mm_srli_si128(top, 2 * C));
@@ -68,8 +71,10 @@ int remap_run_sse2(const Undistorter::Impl&, const hal::Frame& in, const cv::Vec
         const std::uint32_t px = static_cast<std::uint32_t>(_mm_cvtsi128_si32(v));
         // A 4-byte store is one instruction; its extra byte (C == 3) lands on the next
         // pixel, written later, except at the row's end.
-        if (C == 4 || x + 1 < w) std::memcpy(row + C * x, &px, 4);
-        else std::memcpy(row + C * x, &px, C);
+        if (C == 4 || x + 1 < w)
+            std::memcpy(row + C * x, &px, 4);
+        else
+            std::memcpy(row + C * x, &px, C);
     }
     return x;
 }

@@ -161,10 +161,13 @@ TEST(Undistorter, PinholeRemapMatchesTheExactMap) {
     Undistorter u;
     std::string error;
     ASSERT_TRUE(u.init(c, error)) << error;
-    for (const auto [fmt, channels] : std::vector<std::pair<hal::PixelFormat, int>>{
-             {hal::PixelFormat::kGray8, 1}, {hal::PixelFormat::kBgr24, 3}, {hal::PixelFormat::kBgra32, 4}}) {
+    for (const auto [fmt, channels] :
+         std::vector<std::pair<hal::PixelFormat, int>>{{hal::PixelFormat::kGray8, 1},
+                                                       {hal::PixelFormat::kBgr24, 3},
+                                                       {hal::PixelFormat::kBgra32, 4}}) {
         const int stride = c.width * channels + 8;  // padded rows
-        std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height), out(in.size(), 77);
+        std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height),
+            out(in.size(), 77);
         auto level = [](double x, double y, int ch) { return (x + y) / 8.0 + 15 * ch; };
         for (int y = 0; y < c.height; ++y)
             for (int x = 0; x < c.width; ++x)
@@ -187,7 +190,8 @@ TEST(Undistorter, PinholeRemapMatchesTheExactMap) {
                         continue;
                     }
                     if (s.x < 1 || s.y < 1 || s.x > c.width - 2 || s.y > c.height - 2) continue;
-                    EXPECT_NEAR(got, level(s.x, s.y, ch), 2.0) << x << ", " << y << " channel " << ch;
+                    EXPECT_NEAR(got, level(s.x, s.y, ch), 2.0)
+                        << x << ", " << y << " channel " << ch;
                     checked += ch == 0;
                 }
             }
@@ -213,7 +217,8 @@ TEST(Undistorter, FoldingBookPolynomialIsRefused) {
 }
 
 // The per-frame check on white-background frames: unchanged -> ok; the image moved
-// by 6 px -> shifted (by 6 px); magnified 10% -> scope changed; black -> unknown.
+// by 6 px -> shifted (by 6 px); magnified 10% or shrunk 15% -> scope changed;
+// black -> unknown.
 TEST(FovMonitor, FlagsShiftAndScopeChange) {
     const char* white = R"(
 frames: 1
@@ -252,10 +257,11 @@ target: {kind: white, distances_mm: 40}
     check = transformed(cv::Matx23d(1, 0, 6, 0, 1, 0));
     EXPECT_EQ(check.status, FovStatus::kShifted);
     EXPECT_NEAR(check.shift_px, 6.0, 0.5);
-    const double s = 1.1;
-    check = transformed(cv::Matx23d(s, 0, (1 - s) * ref.cx, 0, s, (1 - s) * ref.cy));
-    EXPECT_EQ(check.status, FovStatus::kScopeChanged);
-    EXPECT_NEAR(check.circle.radius, s * ref.radius, 1.0);
+    for (const double s : {1.1, 0.85}) {
+        check = transformed(cv::Matx23d(s, 0, (1 - s) * ref.cx, 0, s, (1 - s) * ref.cy));
+        EXPECT_EQ(check.status, FovStatus::kScopeChanged) << s << " rays " << check.rays;
+        EXPECT_NEAR(check.circle.radius, s * ref.radius, 1.0) << s;
+    }
     std::vector<std::uint8_t> black(img.bgr.size(), 0);
     hal::Frame bf = f;
     bf.data = black.data();

@@ -1,10 +1,10 @@
 // FovMonitor: the per-frame field-of-view check. Measures the illuminated circle's
 // edge along 64 rays from the calibrated centre, walking inwards from 1.3 radii (or
-// the frame's edge) to 0.95 radii, fits a circle to the edges found (rays with dark
-// tissue at the rim are skipped, outliers over 3 px dropped) and compares it with
-// the calibrated one: a shifted centre means the scope moved in its coupler, a
-// different radius another scope (or zoom). Reads about 64 x 0.35 R pixels per
-// frame, allocates nothing. A radius change beyond -5%..+30% reads kUnknown.
+// the frame's edge) to 0.95 radii (0.7 where the disc is dark there), fits a circle to the edges
+// found (rays with dark tissue at the rim are skipped, outliers trimmed) and compares it with the
+// calibrated one: a shifted centre means the scope moved in its coupler, a different radius another
+// scope (or zoom). Reads about 64 x 0.6 R pixels per frame, allocates nothing. A radius change
+// beyond -30%..+30% reads kUnknown.
 #pragma once
 
 #include <array>
@@ -42,7 +42,7 @@ private:
     static constexpr int kRays = 64;
     FovCircle ref_;
     FovMonitorParams params_;
-    std::array<double, kRays> cos_{}, sin_{}, xs_{}, ys_{};
+    std::array<double, kRays> cos_{}, sin_{}, xs_{}, ys_{}, res_{};
 };
 
 }  // namespace endotower::calibration
