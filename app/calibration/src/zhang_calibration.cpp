@@ -174,10 +174,27 @@ bool calibrate_zhang(const std::vector<View>& views, int width, int height, Lens
     Fit fit;
     if (!run_fit(views, use, size, model, options, fit, error)) return false;
     while (options.reject_inconsistent && use.size() >= 4) {
-        // Leave each view out in turn; the one whose absence helps most is the suspect.
+        // Suspects: views whose error in the joint fit exceeds twice the median (at most
+        // the three worst). Each is left out in turn; the one whose absence helps most
+        // is tested below. No suspect, nothing to drop.
+        std::vector<std::pair<double, std::size_t>> per_view;
+        {
+            Obj o;
+            Img i;
+            to_cv(views, use, o, i);
+            for (std::size_t j = 0; j < use.size(); ++j)
+                per_view.push_back(
+                    {view_rms(o[j], i[j], fit.rvecs[j], fit.tvecs[j], fit.k, fit.d, model), j});
+        }
+        std::vector<double> errs;
+        for (const auto& pv : per_view) errs.push_back(pv.first);
+        const double joint_median = median(errs);
+        std::sort(per_view.rbegin(), per_view.rend());
         int worst = -1;
         Fit best;
-        for (std::size_t j = 0; j < use.size(); ++j) {
+        for (std::size_t c = 0; c < std::min<std::size_t>(3, per_view.size()); ++c) {
+            if (!(per_view[c].first > 2 * joint_median)) break;
+            const std::size_t j = per_view[c].second;
             std::vector<int> rest = use;
             rest.erase(rest.begin() + j);
             Fit f;

@@ -2,11 +2,13 @@
 // (k1 k2 p1 p2 k3) or fisheye (k1..k4) from views of a planar target, with automatic
 // rejection of inconsistent views.
 //
-// Rejection (leave-one-out): with every view, then without each one in turn. A view
-// is dropped when leaving it out lowers the RMS by more than a third AND, under the
-// calibration of the others (its pose re-estimated), its own RMS is more than 3x the
-// others' median and above 0.5 px. Repeated while >= 4 views remain. Each dropped
-// view keeps the figures that condemned it, for the report.
+// Rejection (leave-one-out): calibrate with every view; the (up to three) views whose
+// error exceeds twice the median view's are suspects, each left out in turn. The
+// suspect whose absence helps most is dropped when leaving it out lowers the RMS by
+// more than a third AND, under the calibration of the others (its pose
+// re-estimated), its own RMS is more than 3x the others' median and above 0.5 px.
+// Repeated while >= 4 views remain. Each dropped view keeps the figures that
+// condemned it, for the report.
 #pragma once
 
 #include <string>
