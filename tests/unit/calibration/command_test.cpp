@@ -11,6 +11,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
 #include <sstream>
 
 #include "calib_test_util.hpp"
@@ -99,57 +100,74 @@ protected:
     static void SetUpTestSuite() {
         dir = fs::temp_directory_path() / ("endotower_calibrate_" + std::to_string(getpid()));
         fs::remove_all(dir);
-        for (const char* d : {"white", "chart", "marker", "chess"}) fs::create_directories(dir / d);
+        fs::create_directories(dir);
         std::string error;
         scene::SceneRenderer white;
-        ASSERT_TRUE(white.init(
-            scenario_or_fail("frames: 2\nlight: 0.7\ntarget: {kind: white, distances_mm: 40}\n"),
-            26, error))
-            << error;
+        ASSERT_TRUE(white.init(scenario_or_fail(kWhite), 26, error)) << error;
         cam = white.camera();
-        scene::Image img;
-        scene::FrameTruth truth;
-        for (int i = 0; i < white.frames(); ++i) {
-            white.render(i, img, truth);
-            save(dir / "white" / ("white" + std::to_string(i) + ".png"), img);
-        }
-        scene::SceneRenderer chart;
-        ASSERT_TRUE(chart.init(
-            scenario_or_fail("frames: 6\nlight: 0.9\ntarget: {kind: squares, pitch_mm: 8, size_mm: "
-                             "4, cols: 15, rows: 13, distances_mm: [50, 40, 60, 70, 80, 90]}\n"),
-            23, error))
-            << error;
-        for (int i = 0; i < chart.frames(); ++i) {
-            chart.render(i, img, truth);
-            char name[32];
-            std::snprintf(name, sizeof name, "%03.0fmm.png", truth.target.distance_mm);
-            save(dir / "chart" / name, img);
-        }
-        scene::SceneRenderer marker;
-        ASSERT_TRUE(marker.init(
-            scenario_or_fail("frames: 6\nlight: 1.0\ntarget: {kind: two_dot, dot_mm: 3, "
-                             "separation_mm: 10, distances_mm: [30, 50, 70, 80, 120, 200]}\n"),
-            33, error))
-            << error;
-        for (int i = 0; i < marker.frames(); ++i) {
-            marker.render(i, img, truth);
-            char name[32];
-            std::snprintf(name, sizeof name, "marker_%03.0fmm.png", truth.target.distance_mm);
-            save(dir / "marker" / name, img);
-        }
-        const double poses[8][6] = {
-            {0.45, 0, 0, -16, -10, 62},       {-0.45, 0.1, 0.1, -16, -10, 64},
-            {0, 0.45, -0.1, -16, -10, 60},    {0.1, -0.45, 0.2, -16, -10, 66},
-            {0.35, 0.35, 0.3, -16, -10, 68},  {-0.35, -0.35, -0.2, -16, -10, 63},
-            {0.35, -0.35, 0.5, -16, -10, 66}, {-0.35, 0.35, -0.5, -16, -10, 66}};
-        for (int i = 0; i < 8; ++i)
-            cv::imwrite((dir / "chess" / ("view" + std::to_string(i) + ".png")).string(),
-                        render_chessboard(cam, {poses[i][0], poses[i][1], poses[i][2]},
-                                          {poses[i][3], poses[i][4], poses[i][5]}));
     }
     static void TearDownTestSuite() { fs::remove_all(dir); }
 
-    std::string d(const char* sub) const { return (dir / sub).string(); }
+    static inline const char* kWhite =
+        "frames: 2\nlight: 0.7\ntarget: {kind: white, distances_mm: 40}\n";
+
+    // Renders `scenario` into `sub`, naming frame i with `name(truth)`.
+    static void render_folder(const std::string& sub, const char* scenario, int seed,
+                              std::string (*name)(const scene::FrameTruth&, int)) {
+        fs::create_directories(dir / sub);
+        scene::SceneRenderer r;
+        std::string error;
+        ASSERT_TRUE(r.init(scenario_or_fail(scenario), seed, error)) << error;
+        scene::Image img;
+        scene::FrameTruth truth;
+        for (int i = 0; i < r.frames(); ++i) {
+            r.render(i, img, truth);
+            save(dir / sub / name(truth, i), img);
+        }
+    }
+    static std::string by_distance(const scene::FrameTruth& t, int) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%03.0fmm.png", t.target.distance_mm);
+        return b;
+    }
+    static std::string by_index(const scene::FrameTruth&, int i) {
+        return "white" + std::to_string(i) + ".png";
+    }
+
+    // The folder `sub` ("white", "chart", "marker", "chess"), rendered on first use
+    // (each test runs in its own process under ctest: render only what it needs).
+    static std::string d(const char* sub) {
+        static std::set<std::string> made;
+        if (made.insert(sub).second) {
+            const std::string s = sub;
+            if (s == "white") render_folder(s, kWhite, 26, by_index);
+            if (s == "chart")
+                render_folder(
+                    s,
+                    "frames: 6\nlight: 0.9\ntarget: {kind: squares, pitch_mm: 8, size_mm: 4, "
+                    "cols: 15, rows: 13, distances_mm: [50, 40, 60, 70, 80, 90]}\n",
+                    23, by_distance);
+            if (s == "marker")
+                render_folder(
+                    s,
+                    "frames: 6\nlight: 1.0\ntarget: {kind: two_dot, dot_mm: 3, separation_mm: "
+                    "10, distances_mm: [30, 50, 70, 80, 120, 200]}\n",
+                    33, by_distance);
+            if (s == "chess") {
+                fs::create_directories(dir / s);
+                const double poses[8][6] = {
+                    {0.45, 0, 0, -16, -10, 62},       {-0.45, 0.1, 0.1, -16, -10, 64},
+                    {0, 0.45, -0.1, -16, -10, 60},    {0.1, -0.45, 0.2, -16, -10, 66},
+                    {0.35, 0.35, 0.3, -16, -10, 68},  {-0.35, -0.35, -0.2, -16, -10, 63},
+                    {0.35, -0.35, 0.5, -16, -10, 66}, {-0.35, 0.35, -0.5, -16, -10, 66}};
+                for (int i = 0; i < 8; ++i)
+                    cv::imwrite((dir / s / ("view" + std::to_string(i) + ".png")).string(),
+                                render_chessboard(cam, {poses[i][0], poses[i][1], poses[i][2]},
+                                                  {poses[i][3], poses[i][4], poses[i][5]}));
+            }
+        }
+        return (dir / sub).string();
+    }
 };
 
 // Both methods on the same simulated scope; the file holds OpenCV's model plus the
@@ -222,15 +240,15 @@ TEST_F(CalibrateCommand, BadInputLeavesThePreviousFile) {
     cv::imwrite(nocircle + "/grey.png", cv::Mat(480, 640, CV_8UC1, cv::Scalar(128)));
     // Grid not found: a chart image without squares.
     const std::string nogrid = fresh("nogrid");
-    fs::copy_file(dir / "white" / "white0.png", nogrid + "/050mm.png");
+    fs::copy_file(d("white") + "/white0.png", nogrid + "/050mm.png");
     // Too few views: two chessboards.
     const std::string few = fresh("few");
-    fs::copy_file(dir / "chess" / "view0.png", few + "/a.png");
-    fs::copy_file(dir / "chess" / "view1.png", few + "/b.png");
+    cv::imwrite(few + "/a.png", render_chessboard(cam, {0.45, 0, 0}, {-16, -10, 62}));
+    cv::imwrite(few + "/b.png", render_chessboard(cam, {0, 0.45, -0.1}, {-16, -10, 60}));
     // Mixed sizes.
     const std::string mixed = fresh("mixed");
-    for (int i = 0; i < 4; ++i)
-        fs::copy_file(dir / "chess" / ("view" + std::to_string(i) + ".png"),
+    for (int i = 0; i < 2; ++i)
+        fs::copy_file(d("white") + "/white" + std::to_string(i) + ".png",
                       mixed + "/" + std::to_string(i) + ".png");
     cv::imwrite(mixed + "/9small.png", cv::Mat(240, 320, CV_8UC1, cv::Scalar(128)));
     const std::string o = " --out " + out.string();
@@ -241,13 +259,13 @@ TEST_F(CalibrateCommand, BadInputLeavesThePreviousFile) {
          {"050mm.png", "grid not found"}},
         {"--images " + few + " --target chessboard:9x6" + o, {"too few views", "2 image(s)"}},
         {"--images " + mixed + " --target chessboard:9x6" + o, {"9small.png", "mixed sizes"}},
-        {"--images " + d("chess") + " --target chessboard:9x6 --order 4 --model book --white " +
+        {"--images " + d("white") + " --target chessboard:9x6 --order 4 --model book --white " +
              d("white") + o,
          {"--order"}},
-        {"--images " + d("chess") + " --target chessboard:9x6", {"give --out"}},
+        {"--images " + d("white") + " --target chessboard:9x6", {"give --out"}},
         {"--images " + dir.string() + "/none --target chessboard:9x6" + o,
          {"/none", "cannot read the folder"}},
-        {"--images " + d("chess") + " --target chessboard:9x6 --bogus 1" + o,
+        {"--images " + d("white") + " --target chessboard:9x6 --bogus 1" + o,
          {"unknown option '--bogus'"}},
         {"--images " + d("chart") + " --target squares --model pinhole" + o, {"--model book"}},
     };
@@ -285,7 +303,7 @@ TEST_F(CalibrateCommand, SimRecordsTheCalibrationInTheTrace) {
     const fs::path frames = dir / "simin";
     fs::create_directories(frames);
     for (int i = 0; i < 6; ++i)
-        fs::copy_file(dir / "white" / ("white" + std::to_string(i % 2) + ".png"),
+        fs::copy_file(d("white") + "/white" + std::to_string(i % 2) + ".png",
                       frames / ("00000" + std::to_string(i) + ".png"),
                       fs::copy_options::overwrite_existing);
     Calibration c;
