@@ -206,6 +206,53 @@ TEST(ZhangCalibration, CharucoOnRenderedViews) {
     EXPECT_NEAR(r.cy, 245, 4.8);
 }
 
+// A symmetric circle grid (circles:4x11, 10 mm), drawn and seen by a known pinhole
+// camera from eight poses: fx, fy, cx, cy within 1.5%.
+TEST(ZhangCalibration, SymmetricCirclesOnRenderedViews) {
+    TargetSpec spec;
+    std::string error;
+    ASSERT_TRUE(parse_target("circles:4x11", "10", spec, error)) << error;
+    const double px_per_mm = 5, margin_mm = 20;
+    cv::Mat art(static_cast<int>((100 + 2 * margin_mm) * px_per_mm),
+                static_cast<int>((30 + 2 * margin_mm) * px_per_mm), CV_8UC1, cv::Scalar(255));
+    for (int r = 0; r < 11; ++r)
+        for (int c = 0; c < 4; ++c)
+            cv::circle(art,
+                       cv::Point(cvRound((margin_mm + 10 * c) * px_per_mm * 16),
+                                 cvRound((margin_mm + 10 * r) * px_per_mm * 16)),
+                       cvRound(3 * px_per_mm * 16), cv::Scalar(0), cv::FILLED, cv::LINE_AA, 4);
+    const cv::Matx33d k(800, 0, 330, 0, 790, 245, 0, 0, 1);
+    const double poses[8][6] = {{0.5, 0, 0, -15, -50, 320},      {-0.5, 0.1, 0.1, -15, -50, 330},
+                                {0, 0.5, -0.1, -15, -50, 300},   {0.1, -0.5, 0.2, -15, -50, 340},
+                                {0.4, 0.4, 0.3, -15, -50, 350},  {-0.4, -0.4, -0.2, -15, -50, 310},
+                                {0.4, -0.4, 0.5, -15, -50, 330}, {-0.4, 0.4, -0.5, -15, -50, 330}};
+    std::vector<View> views;
+    for (int i = 0; i < 8; ++i) {
+        cv::Matx33d rot;
+        cv::Rodrigues(cv::Vec3d(poses[i][0], poses[i][1], poses[i][2]), rot);
+        const cv::Matx33d rt(rot(0, 0), rot(0, 1), poses[i][3], rot(1, 0), rot(1, 1), poses[i][4],
+                             rot(2, 0), rot(2, 1), poses[i][5]);
+        const cv::Matx33d art_to_mm(1 / px_per_mm, 0, -margin_mm, 0, 1 / px_per_mm, -margin_mm, 0,
+                                    0, 1);
+        cv::Mat img;
+        cv::warpPerspective(art, img, cv::Mat(k * rt * art_to_mm), cv::Size(640, 480),
+                            cv::INTER_LINEAR, cv::BORDER_CONSTANT, 255);
+        GrayImage g{640, 480, std::vector<std::uint8_t>(img.datastart, img.dataend),
+                    "circles" + std::to_string(i)};
+        View v;
+        ASSERT_TRUE(detect_target(g, spec, v, error)) << error;
+        views.push_back(v);
+    }
+    ZhangResult r;
+    ASSERT_TRUE(calibrate_zhang(views, 640, 480, LensModel::kPinhole, r, error)) << error;
+    EXPECT_LE(r.rms, 0.5);
+    EXPECT_NEAR(r.fx, 800, 12);
+    EXPECT_NEAR(r.fy, 790, 12);
+    EXPECT_NEAR(r.cx, 330, 9.6);
+    EXPECT_NEAR(r.cy, 245, 7.2);
+    EXPECT_LT(r.spacing_error, 0.1);
+}
+
 TEST(ZhangCalibration, TargetParsing) {
     TargetSpec t;
     std::string error;
