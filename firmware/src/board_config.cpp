@@ -183,11 +183,13 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         error = path + ": board file is empty";
         return false;
     }
-    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "capture", "button", "handle"}))
+    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "capture", "button", "handle",
+                           "calibration"}))
         return false;
     if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
         return false;
+    if (!r.text(root, "calibration", "calibration", c.calibration)) return false;
     if (const YAML::Node v = root["video"]) {
         if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms", "late_tolerance_ms"}) ||
             !r.number(v, "late_tolerance_ms", "video.late_tolerance_ms", 0, 1000, c.late_tolerance_ms) ||
@@ -224,7 +226,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     }
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
-    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model})
+    for (std::string* p :
+         {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model, &c.calibration})
         *p = resolve(base, *p);
     out = std::move(c);
     return true;

@@ -26,6 +26,9 @@ struct BoardConfig {
     double analysis_virtual_cost_ms = 0.0;
     int max_overlay_age = 0;
 
+    // calibration: the scope's calibration file (endotower calibrate), "" = none
+    std::string calibration;
+
     // sim
     std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;
     bool sim_realtime = false;

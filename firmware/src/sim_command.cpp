@@ -3,6 +3,8 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <optional>
 
@@ -11,6 +13,7 @@
 #include "endotower/app/stage_chain.hpp"
 #include "endotower/app/status_badge.hpp"
 #include "endotower/app/trace_writer.hpp"
+#include "endotower/calibration/calibration_stage.hpp"
 #include "endotower/hal/control_merge.hpp"
 #include "endotower/sim/file_sink.hpp"
 #include "endotower/sim/recorded_source.hpp"
@@ -161,6 +164,22 @@ int run_sim_command(const Args& args) {
         return kExitBadInput;
     }
 
+    // The scope's calibration: validated now, named in every trace line.
+    std::optional<calibration::CalibrationStage> calibration_stage;
+    if (!board.calibration.empty()) {
+        calibration::Calibration cal;
+        if (!calibration::load_calibration(board.calibration, cal, error)) {
+            std::fprintf(stderr, "endotower sim: %s (calibration in %s)\n", error.c_str(), a.board.c_str());
+            return kExitBadInput;
+        }
+        std::ifstream in(board.calibration, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string hash = calibration::content_hash(bytes);
+        std::printf("calibration: %s (scope %s, model %s, hash %s)\n", board.calibration.c_str(), cal.scope.c_str(),
+                    calibration::to_string(cal.model), hash.c_str());
+        calibration_stage.emplace(cal, board.calibration, hash);
+    }
+
     // Simulation owns time unless asked for real time.
     std::unique_ptr<hal::Clock> clock;
     if (board.sim_realtime) clock = std::make_unique<system::MonotonicClock>();
@@ -201,6 +220,7 @@ int run_sim_command(const Args& args) {
     app::StageChain chain;
     if (board.stage == "status_badge") chain.add(&badge);
     if (board.tracker != "none") chain.add(&tracking);
+    if (calibration_stage) chain.add(&*calibration_stage);
     app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 
     app::PipelineConfig cfg;

@@ -49,6 +49,17 @@ TEST(Board, ValuesAndRelativePaths) {
     EXPECT_TRUE(b.sim_realtime);
 }
 
+TEST(Board, CalibrationPathIsResolvedAgainstTheBoardFile) {
+    const std::string p = write_board("cal.yaml", "board: t\ncalibration: scopes/olympus.json\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_EQ(b.calibration, (fs::path(p).parent_path() / "scopes/olympus.json").string());
+    const std::string bad = write_board("cal_bad.yaml", "board: t\ncalibration: [a, b]\n");
+    EXPECT_FALSE(load_board(bad, b, err));
+    EXPECT_NE(err.find("cal_bad.yaml:2: field 'calibration'"), std::string::npos) << err;
+}
+
 struct BadCase {
     const char* text;
     const char* message;  // after "FILE:"

@@ -1,0 +1,292 @@
+// The calibration file (format, validation, hash), the undistortion remap against
+// the simulator's exact camera, and the per-frame field-of-view check.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "calib_test_util.hpp"
+#include "endotower/calibration/calibration_file.hpp"
+#include "endotower/calibration/fov_monitor.hpp"
+#include "endotower/calibration/square_grid.hpp"
+#include "endotower/calibration/undistorter.hpp"
+
+namespace endotower::calibration::test {
+namespace {
+
+Calibration sample() {
+    Calibration c;
+    c.scope = "olympus-wa53000a";
+    c.model = LensModel::kPinhole;
+    c.width = 768, c.height = 710;
+    c.fx = 649.5, c.fy = 649.71, c.cx = 420.12, c.cy = 361.47;
+    c.distortion = {-0.488, 0.347, 0, 0, -0.145};
+    c.rms = 0.284;
+    c.fov = {384, 355, 340};
+    c.book = RadialPolynomial{{0.013084138, 0.000001575}, 384, 355};
+    c.separation = SeparationTable{10, {60, 70, 80}, {58, 50, 40}};
+    return c;
+}
+
+TEST(CalibrationFile, RoundTrip) {
+    const Calibration c = sample();
+    const std::string text = format_calibration(c);
+    Calibration back;
+    std::string error;
+    ASSERT_TRUE(parse_calibration(text, "scope.json", back, error)) << error;
+    EXPECT_EQ(back.scope, c.scope);
+    EXPECT_EQ(back.model, c.model);
+    EXPECT_EQ(back.width, 768);
+    EXPECT_EQ(back.height, 710);
+    EXPECT_DOUBLE_EQ(back.fx, c.fx);
+    EXPECT_DOUBLE_EQ(back.cy, c.cy);
+    EXPECT_EQ(back.distortion, c.distortion);
+    EXPECT_DOUBLE_EQ(back.rms, c.rms);
+    EXPECT_DOUBLE_EQ(back.fov.radius, 340);
+    ASSERT_TRUE(back.book.has_value());
+    EXPECT_EQ(back.book->k, c.book->k);
+    ASSERT_TRUE(back.separation.has_value());
+    EXPECT_EQ(back.separation->separation_px, c.separation->separation_px);
+    // The names outside checks read are top-level members.
+    for (const char* key : {"\"fx\"", "\"fy\"", "\"cx\"", "\"cy\"", "\"distortion\"", "\"rms\""})
+        EXPECT_NE(text.find(std::string("\n  ") + key + ":"), std::string::npos) << key;
+}
+
+TEST(CalibrationFile, ValidationNamesTheProblem) {
+    const std::string good = format_calibration(sample());
+    auto with = [&](const std::string& from, const std::string& to) {
+        std::string t = good;
+        const auto at = t.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        return t.replace(at, from.size(), to);
+    };
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {with("\"fx\": 649.5", "\"fx\": -1"), "scope.json: 'fx' must be a positive number"},
+        {with("\"fx\": 649.5,", ""), "scope.json: missing field 'fx'"},
+        {with("\"fy\": 649.71", "\"fy\": \"a\""), "'fy' must be a number"},
+        {with("\"cx\": 420.12", "\"cx\": 900"), "the centre (cx, cy) lies outside the image"},
+        {with("\"model\": \"pinhole\"", "\"model\": \"fisheye\""), "fisheye needs 4"},
+        {with("\"model\": \"pinhole\"", "\"model\": \"zoom\""), "'model' is 'zoom'"},
+        {with("\"scope\": \"olympus-wa53000a\"", "\"scope\": \"\""), "missing field 'scope'"},
+        {with("\"rms\": 0.284", "\"rms\": -0.1"), "'rms' must not be negative"},
+        {with("1.575e-06", "0.0001"), "'book_polynomial' is not monotonic"},
+        {with("50.0,\n      40.0", "50.0,\n      52.0"), "separation must fall"},
+        {with("\"fx\": 649.5,", "\"fx\": 649.5,,"), "scope.json:2: not valid JSON"},
+    };
+    for (const auto& [text, what] : cases) {
+        Calibration c;
+        std::string error;
+        EXPECT_FALSE(parse_calibration(text, "scope.json", c, error)) << what;
+        EXPECT_NE(error.find(what), std::string::npos) << "got: " << error;
+    }
+    Calibration c;
+    std::string error;
+    EXPECT_FALSE(load_calibration("/nonexistent/scope.json", c, error));
+    EXPECT_NE(error.find("/nonexistent/scope.json: cannot open"), std::string::npos) << error;
+}
+
+TEST(CalibrationFile, ContentHashIsFnv1a64) {
+    EXPECT_EQ(content_hash(""), "cbf29ce484222325");
+    EXPECT_EQ(content_hash("a"), "af63dc4c8601ec8c");
+}
+
+// The book model with the simulator's own distortion (r_d = r_u (1 + k1 r_u^2 +
+// k2 r_u^4), i.e. dr = -k1 r^3 - k2 r^5): the map is the camera's distort()
+// exactly, and the remapped chart's square centres land on the truth's undistorted
+// points within 0.5 px (table 2.5's bound).
+TEST(Undistorter, BookModelUndoesTheSimulatorsDistortion) {
+    const char* chart = R"(
+frames: 1
+light: 0.9
+target: {kind: squares, pitch_mm: 8, size_mm: 4, cols: 15, rows: 13, distances_mm: 45}
+)";
+    scene::SceneRenderer r;
+    std::string error;
+    ASSERT_TRUE(r.init(scenario_or_fail(chart), 5, error)) << error;
+    const scene::CameraModel& cam = r.camera();
+    Calibration c;
+    c.scope = "sim";
+    c.model = LensModel::kBook;
+    c.width = cam.width, c.height = cam.height;
+    c.fx = cam.fx, c.fy = cam.fy, c.cx = cam.cx, c.cy = cam.cy;
+    c.distortion = {0, -cam.k[0], -cam.k[1]};
+    c.book = RadialPolynomial{c.distortion, cam.cx, cam.cy};
+    Undistorter u;
+    ASSERT_TRUE(u.init(c, error)) << error;
+    for (const auto [x, y] :
+         std::vector<std::pair<double, double>>{{10, 10}, {320, 240}, {600, 100}, {150, 420}}) {
+        double xd, yd;
+        cam.distort(x, y, xd, yd);
+        const Point2 s = u.source_of(x, y);
+        EXPECT_NEAR(s.x, xd, 1e-6);
+        EXPECT_NEAR(s.y, yd, 1e-6);
+    }
+    scene::Image img;
+    scene::FrameTruth truth;
+    r.render(0, img, truth);
+    std::vector<std::uint8_t> out(img.bgr.size());
+    hal::Frame in_f, out_f;
+    in_f.format = out_f.format = {img.width, img.height, img.width * 3, hal::PixelFormat::kBgr24};
+    in_f.data = img.bgr.data();
+    out_f.data = out.data();
+    ASSERT_TRUE(u.apply(in_f, out_f));
+    GrayImage g;
+    ASSERT_TRUE(gray_from_frame(out_f, g));
+    // The corrected image's field of view is larger than the displayed circle.
+    const FovCircle whole{cam.cx, cam.cy, 2.0 * cam.height};
+    std::vector<Point2> centres;
+    ASSERT_TRUE(detect_square_centres(g, whole, centres, error)) << error;
+    int matched = 0;
+    for (const Point2& p : centres) {
+        double best = 1e9;
+        for (const scene::Px& t : truth.target.points_px_u)
+            best = std::min(best, std::hypot(t.x - p.x, t.y - p.y));
+        // Squares cut by the corrected image's edge or the circle have biased centroids.
+        double xd, yd;
+        cam.distort(p.x, p.y, xd, yd);
+        if (std::hypot(xd - cam.fov_cx, yd - cam.fov_cy) > cam.fov_radius - 25) continue;
+        if (p.x < 40 || p.y < 40 || p.x > cam.width - 40 || p.y > cam.height - 40) continue;
+        EXPECT_LT(best, 0.5) << "square at " << p.x << ", " << p.y;
+        ++matched;
+    }
+    EXPECT_GE(matched, 20);
+}
+
+// The remap samples bilinearly at the map's source (fixed point: within 2 levels on
+// a smooth ramp, every channel; gray, BGR and BGRA take different code paths), and
+// pixels whose source is outside the field of view are black.
+TEST(Undistorter, PinholeRemapMatchesTheExactMap) {
+    Calibration c = sample();
+    c.model = LensModel::kPinhole;
+    Undistorter u;
+    std::string error;
+    ASSERT_TRUE(u.init(c, error)) << error;
+    for (const auto [fmt, channels] :
+         std::vector<std::pair<hal::PixelFormat, int>>{{hal::PixelFormat::kGray8, 1},
+                                                       {hal::PixelFormat::kBgr24, 3},
+                                                       {hal::PixelFormat::kBgra32, 4}}) {
+        const int stride = c.width * channels + 8;  // padded rows
+        std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height),
+            out(in.size(), 77);
+        auto level = [](double x, double y, int ch) { return (x + y) / 8.0 + 15 * ch; };
+        for (int y = 0; y < c.height; ++y)
+            for (int x = 0; x < c.width; ++x)
+                for (int ch = 0; ch < channels; ++ch)
+                    in[y * stride + x * channels + ch] = static_cast<std::uint8_t>(level(x, y, ch));
+        hal::Frame fi, fo;
+        fi.format = fo.format = {c.width, c.height, stride, fmt};
+        fi.data = in.data();
+        fo.data = out.data();
+        ASSERT_TRUE(u.apply(fi, fo));
+        int checked = 0, black = 0;
+        for (int y = 0; y < c.height; y += 7)
+            for (int x = 0; x < c.width; x += 5) {
+                const Point2 s = u.source_of(x, y);
+                for (int ch = 0; ch < channels; ++ch) {
+                    const int got = out[y * stride + x * channels + ch];
+                    if (!c.fov.contains(s.x, s.y)) {
+                        EXPECT_EQ(got, 0) << x << ", " << y;
+                        black += ch == 0;
+                        continue;
+                    }
+                    if (s.x < 1 || s.y < 1 || s.x > c.width - 2 || s.y > c.height - 2) continue;
+                    EXPECT_NEAR(got, level(s.x, s.y, ch), 2.0)
+                        << x << ", " << y << " channel " << ch;
+                    checked += ch == 0;
+                }
+            }
+        EXPECT_GT(checked, 1000) << channels;
+        EXPECT_GT(black, 100) << channels;
+    }
+    hal::Frame a, b;
+    std::vector<std::uint8_t> buf(c.width * c.height * 3);
+    a.format = b.format = {c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
+    a.data = b.data = buf.data();
+    b.format.width = 100;
+    EXPECT_FALSE(u.apply(a, b));
+}
+
+TEST(Undistorter, FoldingBookPolynomialIsRefused) {
+    Calibration c = sample();
+    c.model = LensModel::kBook;
+    c.book = RadialPolynomial{{0, 1e-4}, 384, 355};
+    Undistorter u;
+    std::string error;
+    EXPECT_FALSE(u.init(c, error));
+    EXPECT_NE(error.find("folds"), std::string::npos) << error;
+}
+
+// The per-frame check on white-background frames: unchanged -> ok; the image moved
+// by 6 px -> shifted (by 6 px); magnified 10% or shrunk 15% -> scope changed;
+// black -> unknown.
+TEST(FovMonitor, FlagsShiftAndScopeChange) {
+    const char* white = R"(
+frames: 1
+light: 0.7
+target: {kind: white, distances_mm: 40}
+)";
+    scene::Scenario sc = scenario_or_fail(white);
+    sc.width = 1280, sc.height = 720;
+    scene::SceneRenderer r;
+    std::string error;
+    ASSERT_TRUE(r.init(sc, 7, error)) << error;
+    scene::Image img;
+    scene::FrameTruth truth;
+    r.render(0, img, truth);
+    const cv::Mat frame(img.height, img.width, CV_8UC3, img.bgr.data());
+    GrayImage g;
+    hal::Frame f;
+    f.format = {img.width, img.height, img.width * 3, hal::PixelFormat::kBgr24};
+    f.data = img.bgr.data();
+    ASSERT_TRUE(gray_from_frame(f, g));
+    FovCircle ref;
+    ASSERT_TRUE(detect_fov_circle(g, ref, error)) << error;
+    FovMonitor monitor(ref);
+    FovCheck check = monitor.check(f);
+    EXPECT_EQ(check.status, FovStatus::kOk);
+    EXPECT_LT(check.shift_px, 0.5);
+    EXPECT_GE(check.rays, 60);
+    auto transformed = [&](const cv::Matx23d& m) {
+        cv::Mat moved;
+        cv::warpAffine(frame, moved, m, frame.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+                       cv::Scalar::all(0));
+        hal::Frame mf = f;
+        mf.data = moved.data;
+        return monitor.check(mf);
+    };
+    check = transformed(cv::Matx23d(1, 0, 6, 0, 1, 0));
+    EXPECT_EQ(check.status, FovStatus::kShifted);
+    EXPECT_NEAR(check.shift_px, 6.0, 0.5);
+    for (const double s : {1.1, 0.85}) {
+        check = transformed(cv::Matx23d(s, 0, (1 - s) * ref.cx, 0, s, (1 - s) * ref.cy));
+        EXPECT_EQ(check.status, FovStatus::kScopeChanged) << s << " rays " << check.rays;
+        EXPECT_NEAR(check.circle.radius, s * ref.radius, 1.0) << s;
+    }
+    std::vector<std::uint8_t> black(img.bgr.size(), 0);
+    hal::Frame bf = f;
+    bf.data = black.data();
+    EXPECT_EQ(monitor.check(bf).status, FovStatus::kUnknown);
+}
+
+// On the real endoscopic frame (tissue up to the rim): the check agrees with the
+// full detection within 1 px.
+TEST(FovMonitor, RealFrameAgreesWithTheDetection) {
+    const std::string path = shared_data("endoseg_fov/demo.jpg");
+    if (!std::filesystem::exists(path))
+        GTEST_SKIP() << "no real data at " << path << " (../shared/data absent)";
+    GrayImage g;
+    std::string error;
+    ASSERT_TRUE(load_gray_image(path, g, error)) << error;
+    FovCircle ref;
+    ASSERT_TRUE(detect_fov_circle(g, ref, error)) << error;
+    hal::Frame f;
+    f.format = {g.width, g.height, g.width, hal::PixelFormat::kGray8};
+    f.data = g.pixels.data();
+    const FovCheck check = FovMonitor(ref).check(f);
+    EXPECT_EQ(check.status, FovStatus::kOk);
+    EXPECT_LT(check.shift_px, 1.0);
+    EXPECT_NEAR(check.circle.radius, ref.radius, 1.5);
+}
+
+}  // namespace
+}  // namespace endotower::calibration::test
