@@ -22,6 +22,7 @@ struct BoardConfig {
     std::string stage = "status_badge";  // "status_badge" | "none"
     std::string tracker = "none";        // "none" | "kalman" | "kalman_red" | "likelihood"
     std::string tool_model;              // the likelihood tracker's model file
+    double tool_diameter_mm = 5;         // shaft diameter for the 3-D pose (with a calibration)
     double analysis_timeout_ms = 0.0;
     double analysis_virtual_cost_ms = 0.0;
     int max_overlay_age = 0;

@@ -14,6 +14,7 @@
 #include "endotower/app/status_badge.hpp"
 #include "endotower/app/trace_writer.hpp"
 #include "endotower/calibration/calibration_stage.hpp"
+#include "endotower/calibration/undistorter.hpp"
 #include "endotower/hal/control_merge.hpp"
 #include "endotower/sim/file_sink.hpp"
 #include "endotower/sim/recorded_source.hpp"
@@ -166,8 +167,8 @@ int run_sim_command(const Args& args) {
 
     // The scope's calibration: validated now, named in every trace line.
     std::optional<calibration::CalibrationStage> calibration_stage;
+    calibration::Calibration cal;
     if (!board.calibration.empty()) {
-        calibration::Calibration cal;
         if (!calibration::load_calibration(board.calibration, cal, error)) {
             std::fprintf(stderr, "endotower sim: %s (calibration in %s)\n", error.c_str(), a.board.c_str());
             return kExitBadInput;
@@ -221,6 +222,29 @@ int run_sim_command(const Args& args) {
     if (board.stage == "status_badge") chain.add(&badge);
     if (board.tracker != "none") chain.add(&tracking);
     if (calibration_stage) chain.add(&*calibration_stage);
+    // With a calibration of this image size, the tracker's tools get their 3-D pose.
+    calibration::Undistorter undistorter;
+    if (calibration_stage && board.tracker != "none") {
+        const hal::FrameFormat f = source.format();
+        if (cal.width != f.width || cal.height != f.height) {
+            std::printf("calibration: %dx%d, the input is %dx%d: no 3-D tool pose\n", cal.width, cal.height, f.width,
+                        f.height);
+        } else if (!undistorter.init(cal, error)) {
+            std::printf("calibration: %s: no 3-D tool pose\n", error.c_str());
+        } else {
+            // The corrected point whose source is p: a fixed point, the distortion is mild.
+            auto to_corrected = [&undistorter](vision::Point2 p) {
+                vision::Point2 q = p;
+                for (int i = 0; i < 12; ++i) {
+                    const calibration::Point2 s = undistorter.source_of(q.x, q.y);
+                    q.x += p.x - s.x;
+                    q.y += p.y - s.y;
+                }
+                return q;
+            };
+            tracking.set_camera({cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected, board.tool_diameter_mm);
+        }
+    }
     app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 
     app::PipelineConfig cfg;

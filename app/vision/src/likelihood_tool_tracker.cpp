@@ -13,8 +13,10 @@ namespace endotower::vision {
 namespace {
 
 struct Candidate {
-    double area = 0, length = 0, width = 0, confidence = 0;
+    double area = 0, length = 0, width = 0, shaft_width = 0, confidence = 0;
     Point2 tip, rim_end;
+    bool has_edges = false;
+    Segment e1, e2;
 };
 
 struct Px {
@@ -48,6 +50,61 @@ bool fit_axis(const Px* begin, const Px* end, Pred use, Line& out, double& n, do
     const double a = 0.5 * std::atan2(2 * cxy, cxx - cyy);
     out = {mx, my, std::cos(a), std::sin(a)};
     return true;
+}
+
+// Grey (mean of B, G, R) at a sub-pixel position of a BGR image, bilinear.
+double grey_at(const cv::Mat& img, double x, double y) {
+    const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+    if (x0 < 0 || y0 < 0 || x0 + 1 >= img.cols || y0 + 1 >= img.rows) return -1;
+    const double fx = x - x0, fy = y - y0;
+    auto g = [&](int xx, int yy) {
+        const std::uint8_t* p = img.ptr<std::uint8_t>(yy) + 3 * xx;
+        return (p[0] + p[1] + p[2]) / 3.0;
+    };
+    return (1 - fy) * ((1 - fx) * g(x0, y0) + fx * g(x0 + 1, y0)) + fy * ((1 - fx) * g(x0, y0 + 1) + fx * g(x0 + 1, y0 + 1));
+}
+
+// Moves a coarse silhouette edge (full-resolution px) onto the image's strongest
+// grey-level step within `reach` px along its normal, at `samples` points of its
+// first `extent` (0..1, from a): a line through the sub-pixel steps (parabola fit
+// of the gradient peak), or the coarse edge where too few steps are found.
+Segment refine_edge(const cv::Mat& img, const Segment& e, double extent, double reach) {
+    constexpr int kSamples = 16;
+    const double dx = e.b.x - e.a.x, dy = e.b.y - e.a.y, len = std::hypot(dx, dy);
+    if (len < 4) return e;
+    const double ux = dx / len, uy = dy / len, nx = -uy, ny = ux;
+    std::array<double, kSamples> ts{}, os{};
+    int n = 0;
+    const int steps = static_cast<int>(std::ceil(reach));
+    for (int k = 0; k < kSamples; ++k) {
+        const double t = (0.2 + 0.8 * (k + 0.5) / kSamples) * extent * len;
+        const double px = e.a.x + t * ux, py = e.a.y + t * uy;
+        double best = 0;
+        int at = 0;
+        std::array<double, 64> grad{};
+        for (int j = -steps; j <= steps; ++j) {
+            const double g0 = grey_at(img, px + (j - 0.5) * nx, py + (j - 0.5) * ny),
+                         g1 = grey_at(img, px + (j + 0.5) * nx, py + (j + 0.5) * ny);
+            if (g0 < 0 || g1 < 0) continue;
+            grad[j + steps] = std::abs(g1 - g0);
+            if (grad[j + steps] > best) best = grad[j + steps], at = j;
+        }
+        if (best < 8 || at == -steps || at == steps) continue;  // no clear step in reach
+        const double gm = grad[at - 1 + steps], g0 = grad[at + steps], gp = grad[at + 1 + steps];
+        const double den = gm - 2 * g0 + gp;
+        const double off = at + (std::abs(den) > 1e-9 ? 0.5 * (gm - gp) / den : 0.0);
+        ts[n] = t, os[n] = off, ++n;
+    }
+    if (n < 6) return e;
+    double st = 0, so = 0, stt = 0, sto = 0;
+    for (int k = 0; k < n; ++k) st += ts[k], so += os[k], stt += ts[k] * ts[k], sto += ts[k] * os[k];
+    const double den = n * stt - st * st;
+    const double slope = std::abs(den) > 1e-9 ? (n * sto - st * so) / den : 0, icpt = (so - slope * st) / n;
+    auto at_t = [&](double t) {
+        const double o = icpt + slope * t;
+        return Point2{e.a.x + t * ux + o * nx, e.a.y + t * uy + o * ny};
+    };
+    return {at_t(0), at_t(len)};
 }
 
 }  // namespace
@@ -243,12 +300,14 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
                 }
             const double band = std::max(1.0, 0.03 * (hi - lo));
             Point2 e_lo, e_hi;
-            double n_lo = 0, n_hi = 0;
+            double n_lo = 0, n_hi = 0, half_lo = 0;
+            const double mid = 0.5 * (lo + hi);
             for (const Px* p = begin; p != end; ++p)
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     if (t <= lo + band) e_lo.x += p->x, e_lo.y += p->y, n_lo += 1;
                     if (t >= hi - band) e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
+                    half_lo += t < mid;
                 }
             e_lo = {e_lo.x / n_lo, e_lo.y / n_lo};
             e_hi = {e_hi.x / n_hi, e_hi.y / n_hi};
@@ -258,8 +317,45 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
             c.area = nj;
             c.length = std::max(1.0, hi - lo);
             c.width = nj / c.length;
+            // The shaft alone (the half towards the rim; the jaws are narrower).
+            c.shaft_width = (d_lo > d_hi ? nj - half_lo : half_lo) / (0.5 * c.length);
             c.tip = d_lo > d_hi ? e_lo : e_hi;
             c.rim_end = d_lo > d_hi ? e_hi : e_lo;
+            // The silhouette edges of the shaft half: per slice along the axis, the
+            // outermost pixel on each side; a line fitted to each side (perspective
+            // makes them converge, which the 3-D pose needs).
+            constexpr int kSlices = 16;
+            std::array<double, kSlices> s_min, s_max;
+            s_min.fill(std::numeric_limits<double>::max());
+            s_max.fill(-std::numeric_limits<double>::max());
+            const bool rim_high = d_lo > d_hi;
+            const double t0 = rim_high ? mid : lo, t1 = rim_high ? hi : mid;
+            for (const Px* p = begin; p != end; ++p)
+                if (mine(p)) {
+                    const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+                    if (t < t0 || t >= t1) continue;
+                    const int k = std::min(kSlices - 1, static_cast<int>((t - t0) / (t1 - t0) * kSlices));
+                    const double o = -(p->x - axis.px) * axis.uy + (p->y - axis.py) * axis.ux;
+                    s_min[k] = std::min(s_min[k], o - 0.5), s_max[k] = std::max(s_max[k], o + 0.5);
+                }
+            auto fit_side = [&](const std::array<double, kSlices>& side, Segment& out) {
+                double n = 0, st = 0, so = 0, stt = 0, sto = 0;
+                for (int k = 0; k < kSlices; ++k) {
+                    if (std::abs(side[k]) > 1e300) continue;
+                    const double t = t0 + (k + 0.5) * (t1 - t0) / kSlices;
+                    n += 1, st += t, so += side[k], stt += t * t, sto += t * side[k];
+                }
+                if (n < 3) return false;
+                const double den = n * stt - st * st;
+                const double slope = std::abs(den) > 1e-9 ? (n * sto - st * so) / den : 0, icpt = (so - slope * st) / n;
+                auto at = [&](double t) {
+                    const double o = icpt + slope * t;
+                    return Point2{axis.px + t * axis.ux - o * axis.uy, axis.py + t * axis.uy + o * axis.ux};
+                };
+                out = {at(lo), at(hi)};
+                return true;
+            };
+            c.has_edges = fit_side(s_min, c.e1) && fit_side(s_max, c.e2);
             c.confidence = std::clamp(psum / nj / 255.0, 0.0, 1.0);
             w.candidates.push_back(c);
         }
@@ -323,13 +419,18 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         e.axis_deg = std::atan2(dy, dx) * 180.0 / M_PI;
         e.width_px = c.width * inv;
         e.confidence = c.confidence;
-        // The silhouette edges: the axis offset by half the width each side, from the
-        // tip to the rim (what ToolPose needs for the 3-D pose).
-        const double nx = -dy / len * c.width / 2, ny = dx / len * c.width / 2;
-        e.edges.found = true;
-        e.edges.width_px = c.width * inv;
-        e.edges.e1 = {{(c.tip.x + nx) * inv, (c.tip.y + ny) * inv}, {(c.rim_end.x + nx) * inv, (c.rim_end.y + ny) * inv}};
-        e.edges.e2 = {{(c.tip.x - nx) * inv, (c.tip.y - ny) * inv}, {(c.rim_end.x - nx) * inv, (c.rim_end.y - ny) * inv}};
+        e.edges.found = c.has_edges;
+        e.edges.width_px = c.shaft_width * inv;
+        // The coarse edges (analysis scale) refined on the full-resolution frame, from
+        // the tip's end: the 3-D pose's depth rests on the apparent width, where a
+        // pixel is worth about 4 % of the distance.
+        auto scaled = [inv](const Segment& s) { return Segment{{s.a.x * inv, s.a.y * inv}, {s.b.x * inv, s.b.y * inv}}; };
+        const bool tip_at_a = std::hypot(c.e1.a.x - c.tip.x, c.e1.a.y - c.tip.y) < std::hypot(c.e1.b.x - c.tip.x, c.e1.b.y - c.tip.y);
+        auto from_tip = [tip_at_a](Segment s) { return tip_at_a ? s : Segment{s.b, s.a}; };
+        if (c.has_edges) {
+            e.edges.e1 = refine_edge(full, from_tip(scaled(c.e1)), 1.0, 2.5 * inv);
+            e.edges.e2 = refine_edge(full, from_tip(scaled(c.e2)), 1.0, 2.5 * inv);
+        }
         e.edges.midline = {e.tip, {c.rim_end.x * inv, c.rim_end.y * inv}};
     }
     return count;

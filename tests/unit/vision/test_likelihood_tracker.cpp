@@ -142,11 +142,14 @@ TEST(LikelihoodToolTracker, FindsTipAxisAndWidthOfOneShaft) {
         EXPECT_LT(angle_diff(out[0].axis_deg, s.dir_deg), 2.0) << s.dir_deg;
         EXPECT_NEAR(out[0].width_px, s.width, 0.15 * s.width) << s.dir_deg;
         EXPECT_GT(out[0].confidence, 0.9);
-        // The edges run along the axis, one width apart.
+        // The silhouette edges, refined on the full frame: along the axis from the tip,
+        // one shaft width apart (the drawn shaft's edges are exact to half a pixel).
         ASSERT_TRUE(out[0].edges.found);
-        const Segment& e1 = out[0].edges.e1;
-        EXPECT_NEAR(std::hypot(e1.a.x - out[0].edges.e2.a.x, e1.a.y - out[0].edges.e2.a.y), out[0].width_px, 1e-6);
-        EXPECT_LT(angle_diff(std::atan2(e1.b.y - e1.a.y, e1.b.x - e1.a.x) * 180 / M_PI, s.dir_deg), 2.0);
+        for (const Segment& e : {out[0].edges.e1, out[0].edges.e2}) {
+            EXPECT_LT(angle_diff(std::atan2(e.b.y - e.a.y, e.b.x - e.a.x) * 180 / M_PI, s.dir_deg), 1.0);
+            EXPECT_NEAR(std::abs(distance_to_line({s.tip.x, s.tip.y}, e)), s.width / 2, 0.75);
+        }
+        EXPECT_NEAR(out[0].edges.width_px, s.width, 0.1 * s.width);
         // The head is 2.7 widths from the tip along the axis.
         EXPECT_NEAR(std::hypot(out[0].head.x - out[0].tip.x, out[0].head.y - out[0].tip.y), 2.7 * out[0].width_px, 1e-6);
     }
