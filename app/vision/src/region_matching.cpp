@@ -9,12 +9,12 @@
 namespace endotower::vision::detail {
 
 FeatureDetector::FeatureDetector(RegionDescriptor d, int max_width, int max_features)
-    : max_width_(std::max(64, max_width)) {
+    : max_width_(std::max(64, max_width)), max_features_(max_features) {
     switch (d) {
         case RegionDescriptor::kSift:
             // Table 6.1: octaves from the image size, the levels per octave OpenCV's 3
             // (the book's "four levels" counts the extra DoG level).
-            feature_ = cv::SIFT::create(max_features);
+            feature_ = cv::SIFT::create(max_features, 3, 0.01);
             norm_ = cv::NORM_L2;
             break;
         case RegionDescriptor::kOrb:
@@ -26,6 +26,7 @@ FeatureDetector::FeatureDetector(RegionDescriptor d, int max_width, int max_feat
         case RegionDescriptor::kAkaze:
             // Half the default threshold: tissue is low in contrast.
             feature_ = cv::AKAZE::create(cv::AKAZE::DESCRIPTOR_MLDB, 0, 3, 0.0005f);
+            cap_after_detection_ = max_features > 0;  // AKAZE has no feature budget of its own
             norm_ = cv::NORM_HAMMING;
             break;
     }
@@ -51,7 +52,13 @@ void FeatureDetector::detect(const cv::Mat& gray, cv::Rect roi, const cv::Mat& m
             work_mask = small_mask_;
         }
     }
-    feature_->detectAndCompute(work, work_mask, out.keypoints, out.descriptors);
+    if (cap_after_detection_) {
+        feature_->detect(work, out.keypoints, work_mask);
+        cv::KeyPointsFilter::retainBest(out.keypoints, max_features_);
+        feature_->compute(work, out.keypoints, out.descriptors);
+    } else {
+        feature_->detectAndCompute(work, work_mask, out.keypoints, out.descriptors);
+    }
     const double sx = static_cast<double>(roi.width) / work.cols, sy = static_cast<double>(roi.height) / work.rows;
     for (cv::KeyPoint& k : out.keypoints) {
         // Pixel centres: working pixel (i + 0.5) covers input pixels up to (i + 1) * s.
@@ -84,8 +91,13 @@ bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int nor
     // The book's well-matched pairs: shorter than the average distance. Ties (Hamming
     // distances are integers) stay, so a set of equal distances is not emptied.
     const double mean = sum / static_cast<double>(kept.size());
+    std::size_t below = 0;
+    for (const cv::DMatch& m : kept) below += m.distance <= mean;
+    // A small region has few matches: when the filter would leave too few for
+    // RANSAC to be meaningful, RANSAC sorts the ratio-tested set instead.
+    const bool filter = below >= static_cast<std::size_t>(2 * p.min_inliers);
     for (const cv::DMatch& m : kept) {
-        if (m.distance > mean) continue;
+        if (filter && m.distance > mean) continue;
         out.keyframe_pts.push_back(keyframe.keypoints[m.queryIdx].pt);
         out.frame_pts.push_back(frame.keypoints[m.trainIdx].pt);
     }

@@ -36,6 +36,8 @@ private:
     cv::Ptr<cv::Feature2D> feature_;
     int norm_ = cv::NORM_L2;
     int max_width_;
+    int max_features_;
+    bool cap_after_detection_ = false;
     cv::Mat small_, small_mask_;
 };
 

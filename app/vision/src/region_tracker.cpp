@@ -15,9 +15,15 @@ namespace {
 
 constexpr int kLkWindow = 21;
 constexpr int kLkLevels = 3;
-// Whole-frame detections keep the strongest features; a region's keyframe keeps all.
-constexpr int kFrameFeatures = 4000;
-constexpr int kKeyframeFeatures = 1500;
+// Detections keep the strongest features: matching is brute force, so its cost is
+// the product of the two counts.
+constexpr int kFrameFeatures = 2000;
+constexpr int kKeyframeFeatures = 500;
+constexpr int kTrackCorners = 300;
+constexpr int kShadingBox = 15;
+// Keyframe and propagated polygons closer than this (mean corner distance, working
+// pixels) agree: the propagation is kept.
+constexpr double kAgreePx = 2.0;
 // A homography may not grow or shrink the region more than this (in area).
 constexpr double kMaxAreaRatio = 25.0;
 // Below this fraction of its bounding box in the picture a region counts as gone.
@@ -40,6 +46,12 @@ double signed_area(const std::vector<cv::Point2f>& p) {
     double a = 0;
     for (std::size_t i = 0, j = p.size() - 1; i < p.size(); j = i++) a += double(p[j].x) * p[i].y - double(p[i].x) * p[j].y;
     return a / 2;
+}
+
+double mean_distance(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+    double s = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) s += cv::norm(a[i] - b[i]);
+    return s / static_cast<double>(a.size());
 }
 
 cv::Rect2f bounds(const std::vector<cv::Point2f>& poly) {
@@ -81,6 +93,7 @@ struct RegionTracker::Impl {
         double kf_area = 0;
         bool convex = false;
         detail::FeatureSet keyframe;
+        std::vector<cv::Point2f> kf_track;  // corners and keypoints that LK follows
         RegionState state = RegionState::kTracked;
         cv::Matx33d homography = cv::Matx33d::eye();  // keyframe -> current frame
         std::vector<cv::Point2f> polygon;             // current, or last known while lost
@@ -94,17 +107,18 @@ struct RegionTracker::Impl {
 
     explicit Impl(RegionTrackerParams params)
         : p(params),
-          keyframe_detector(p.descriptor, p.detect_max_width, p.descriptor == RegionDescriptor::kOrb ? kKeyframeFeatures : 0),
+          keyframe_detector(p.descriptor, p.detect_max_width, kKeyframeFeatures),
           frame_detector(p.descriptor, p.detect_max_width, kFrameFeatures) {}
 
     bool plausible(const Region& r, const cv::Matx33d& h, cv::Size frame, std::vector<cv::Point2f>& poly) const;
     bool propagate(Region& r, cv::Size frame);
     bool match(Region& r, const cv::Mat& gray, bool whole, const std::vector<cv::Point2f>& around);
+    void reseed(Region& r, cv::Size frame);
 
     RegionTrackerParams p;
     detail::FeatureDetector keyframe_detector, frame_detector;
     std::vector<Region> regions;
-    cv::Mat gray, prev_gray, mask;
+    cv::Mat gray, prev_gray, mask, shading, detail;
     std::vector<cv::Mat> pyramid, prev_pyramid;
     detail::FeatureSet whole_frame, window;
     bool whole_frame_ready = false;
@@ -163,6 +177,7 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
 }
 
 // Keyframe matching in a window around `around` (1.5x its size), or the whole frame.
+// The result is left in `matched` and `candidate` (its polygon).
 bool RegionTracker::Impl::match(Region& r, const cv::Mat& g, bool whole, const std::vector<cv::Point2f>& around) {
     const detail::MatchParams mp{p.ratio, p.ransac_px * frame_detector.pixel_size(g.cols), p.min_inliers};
     detail::FeatureSet* features = &whole_frame;
@@ -173,16 +188,24 @@ bool RegionTracker::Impl::match(Region& r, const cv::Mat& g, bool whole, const s
         frame_detector.detect(g, expanded_box(around, 0.25, 16), cv::Mat(), window);
         features = &window;
     }
-    if (!detail::match_keyframe(r.keyframe, *features, frame_detector.norm(), mp, matched)) return false;
-    if (!plausible(r, matched.homography, g.size(), candidate)) return false;
-    r.homography = matched.homography;
-    r.polygon = candidate;
-    r.kf_pts = matched.keyframe_pts;
-    r.cur_pts = matched.frame_pts;
-    r.inliers = matched.inliers;
-    r.since_match = 0;
-    r.force_match = false;
-    return true;
+    return detail::match_keyframe(r.keyframe, *features, frame_detector.norm(), mp, matched) &&
+           plausible(r, matched.homography, g.size(), candidate);
+}
+
+void RegionTracker::Impl::reseed(Region& r, cv::Size frame) {
+    // All the keyframe's points through the region's homography: points that left the
+    // picture and came back are followed again, and the frame-to-frame drift of single
+    // points is dropped.
+    r.kf_pts.clear();
+    r.cur_pts.clear();
+    const cv::Matx33d& h = r.homography;
+    for (const cv::Point2f& v : r.kf_track) {
+        const double w = h(2, 0) * v.x + h(2, 1) * v.y + h(2, 2);
+        const double x = (h(0, 0) * v.x + h(0, 1) * v.y + h(0, 2)) / w, y = (h(1, 0) * v.x + h(1, 1) * v.y + h(1, 2)) / w;
+        if (!(x >= 0 && y >= 0 && x <= frame.width - 1 && y <= frame.height - 1)) continue;
+        r.kf_pts.push_back(v);
+        r.cur_pts.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    }
 }
 
 RegionTracker::RegionTracker(RegionTrackerParams params) : impl_(std::make_unique<Impl>(params)) {}
@@ -241,7 +264,12 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
         return false;
     }
     r.polygon = r.kf_polygon;
-    for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_pts.push_back(k.pt);
+    // LK follows Shi-Tomasi corners as well as the keypoints: many more points than a
+    // small region has descriptors, so propagation stays well determined.
+    cv::goodFeaturesToTrack(g(roi), r.kf_track, kTrackCorners, 0.005, 4, m.mask, 5);
+    for (cv::Point2f& c : r.kf_track) c += cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
+    for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_track.push_back(k.pt);
+    r.kf_pts = r.kf_track;
     r.cur_pts = r.kf_pts;
     r.inliers = static_cast<int>(r.kf_pts.size());
     r.mark_sequence = frame.sequence;
@@ -258,8 +286,13 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
     m.whole_frame_ready = false;
     const bool readable = to_gray(frame, m.gray);
     const bool resized = !readable || m.gray.size() != m.prev_gray.size();
-    if (readable && m.p.propagate)
-        cv::buildOpticalFlowPyramid(m.gray, m.pyramid, cv::Size(kLkWindow, kLkWindow), kLkLevels);
+    if (readable && m.p.propagate) {
+        // LK follows the texture, not the light: the endoscope carries its light, so
+        // shading moves with the camera and would drag the points (a high-pass image).
+        cv::blur(m.gray, m.shading, cv::Size(kShadingBox, kShadingBox));
+        cv::addWeighted(m.gray, 1.0, m.shading, -1.0, 128.0, m.detail);
+        cv::buildOpticalFlowPyramid(m.detail, m.pyramid, cv::Size(kLkWindow, kLkWindow), kLkLevels);
+    }
     if (!readable) m.gray.release();
     const cv::Size size = m.gray.size();
     std::size_t n = 0;
@@ -278,8 +311,23 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
             if (!m.p.propagate || r.force_match || !found || due || resized) {
                 // Drift correction near where the region is; recovery over the whole frame.
                 const bool near = was_tracked && (found || !m.p.propagate);
-                keyframe = (near && m.match(r, m.gray, false, r.polygon)) || m.match(r, m.gray, true, r.polygon);
-                found = found || keyframe;
+                bool ok = m.match(r, m.gray, !near, r.polygon);
+                if (!ok && near && !found) ok = m.match(r, m.gray, true, r.polygon);
+                if (ok) {
+                    r.since_match = 0;
+                    r.force_match = false;
+                    // Propagation that agrees with the keyframe is kept (many more points,
+                    // sub-pixel); one that has drifted further is replaced.
+                    const double tolerance = kAgreePx * m.frame_detector.pixel_size(size.width);
+                    if (!found || mean_distance(m.candidate, r.polygon) > tolerance) {
+                        r.homography = m.matched.homography;
+                        r.polygon = m.candidate;
+                        r.inliers = m.matched.inliers;
+                        keyframe = true;
+                    }
+                    m.reseed(r, size);
+                }
+                found = found || ok;
             }
         }
         if (found) {

@@ -134,10 +134,10 @@ TEST(RegionTracker, LostWhenTheRegionLeavesThePictureAndRecoveredWhenItReturns) 
     app::OverlayCanvas canvas;
     canvas.configure(640, 480);
     app::JsonLine line;
-    // 0 .. 700 px in steps of 35 and back.
+    // 0 .. 700 px in steps of 70 and back.
     std::vector<int> pan;
-    for (int x = 0; x <= 700; x += 35) pan.push_back(x);
-    for (int x = 700; x >= 0; x -= 35) pan.push_back(x);
+    for (int x = 0; x <= 700; x += 70) pan.push_back(x);
+    for (int x = 700; x >= 0; x -= 70) pan.push_back(x);
     bool was_lost = false;
     for (std::size_t i = 0; i < pan.size(); ++i) {
         cv::Mat img = frame_at(pan[i]);
