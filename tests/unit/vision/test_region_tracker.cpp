@@ -13,11 +13,13 @@
 #include "endotower/app/overlay_canvas.hpp"
 #include "endotower/vision/region_stage.hpp"
 #include "endotower/vision/region_tracker.hpp"
+#include "region_test_util.hpp"
 
 namespace endotower::vision {
 namespace {
 
 namespace fs = std::filesystem;
+using test::texture;
 
 hal::Frame view(cv::Mat& img, std::uint64_t seq = 0) {
     hal::Frame f;
@@ -26,29 +28,6 @@ hal::Frame view(cv::Mat& img, std::uint64_t seq = 0) {
     f.sequence = seq;
     f.capture_ns = static_cast<hal::Nanos>(seq) * 40'000'000;
     return f;
-}
-
-// Tissue-like texture: smoothed random blobs at several scales, deterministic.
-cv::Mat texture(int w, int h, std::uint64_t seed) {
-    cv::RNG rng(seed);
-    cv::Mat acc(h, w, CV_32F, cv::Scalar(0));
-    for (int cell : {4, 9, 20, 50}) {
-        cv::Mat small(h / cell + 2, w / cell + 2, CV_32F), big;
-        rng.fill(small, cv::RNG::UNIFORM, 0, 1);
-        cv::resize(small, big, cv::Size(w, h), 0, 0, cv::INTER_CUBIC);
-        acc += big * std::sqrt(cell / 20.0);
-    }
-    // Vessel-like dark curves.
-    for (int i = 0; i < w * h / 8000; ++i) {
-        const cv::Point a(rng.uniform(0, w), rng.uniform(0, h));
-        const cv::Point b = a + cv::Point(rng.uniform(-60, 60), rng.uniform(-60, 60));
-        cv::line(acc, a, b, cv::Scalar(-0.8), rng.uniform(1, 4), cv::LINE_AA);
-    }
-    cv::Mat u8, bgr;
-    cv::normalize(acc, acc, 30, 230, cv::NORM_MINMAX);
-    acc.convertTo(u8, CV_8U);
-    cv::cvtColor(u8, bgr, cv::COLOR_GRAY2BGR);
-    return bgr;
 }
 
 std::vector<Point2> map_polygon(const cv::Matx33d& h, const std::vector<Point2>& poly) {
