@@ -1,8 +1,6 @@
 #include "region_matching.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -85,8 +83,6 @@ bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int nor
         kept.push_back(m[0]);
         sum += m[0].distance;
     }
-    if (std::getenv("ENDOTOWER_REGION_DEBUG"))
-        std::fprintf(stderr, "match: kf %zu frame %zu ratio %zu\n", keyframe.keypoints.size(), frame.keypoints.size(), kept.size());
     if (kept.size() < static_cast<std::size_t>(std::max(4, p.min_inliers))) return false;
     // The book's well-matched pairs: shorter than the average distance. Ties (Hamming
     // distances are integers) stay, so a set of equal distances is not emptied.
@@ -113,9 +109,6 @@ bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int nor
         out.frame_pts[n] = out.frame_pts[i];
         ++n;
     }
-    if (std::getenv("ENDOTOWER_REGION_DEBUG"))
-        std::fprintf(stderr, "match: kf %zu frame %zu ratio %zu mean %zu inliers %zu\n", keyframe.keypoints.size(),
-                     frame.keypoints.size(), kept.size(), inlier_mask.size(), n);
     out.keyframe_pts.resize(n);
     out.frame_pts.resize(n);
     out.inliers = static_cast<int>(n);

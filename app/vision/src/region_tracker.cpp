@@ -24,21 +24,29 @@ constexpr int kShadingBox = 15;
 // Keyframe and propagated polygons closer than this (mean corner distance, working
 // pixels) agree: the propagation is kept.
 constexpr double kAgreePx = 2.0;
+// Fraction of the followed points that must fit the propagated homography.
+constexpr double kMinAgreeing = 0.4;
 // A homography may not grow or shrink the region more than this (in area).
 constexpr double kMaxAreaRatio = 25.0;
 // Below this fraction of its bounding box in the picture a region counts as gone.
 constexpr double kMinVisible = 0.2;
 
-bool to_gray(const hal::Frame& f, cv::Mat& gray) {
+bool supported(const hal::Frame& f) {
+    using hal::PixelFormat;
+    const PixelFormat p = f.format.pixel_format;
+    return f.data != nullptr && f.format.width > 0 && f.format.height > 0 &&
+           (p == PixelFormat::kBgr24 || p == PixelFormat::kRgb24 || p == PixelFormat::kBgra32 || p == PixelFormat::kGray8);
+}
+
+// The grey image of `roi` of a supported frame.
+void to_gray(const hal::Frame& f, cv::Rect roi, cv::Mat& gray) {
     const int w = f.format.width, h = f.format.height;
     const auto step = static_cast<std::size_t>(f.format.stride);
-    if (f.data == nullptr || w <= 0 || h <= 0) return false;
     switch (f.format.pixel_format) {
-        case hal::PixelFormat::kBgr24: cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step), gray, cv::COLOR_BGR2GRAY); return true;
-        case hal::PixelFormat::kRgb24: cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step), gray, cv::COLOR_RGB2GRAY); return true;
-        case hal::PixelFormat::kBgra32: cv::cvtColor(cv::Mat(h, w, CV_8UC4, f.data, step), gray, cv::COLOR_BGRA2GRAY); return true;
-        case hal::PixelFormat::kGray8: cv::Mat(h, w, CV_8UC1, f.data, step).copyTo(gray); return true;
-        default: return false;
+        case hal::PixelFormat::kBgr24: cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step)(roi), gray, cv::COLOR_BGR2GRAY); break;
+        case hal::PixelFormat::kRgb24: cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step)(roi), gray, cv::COLOR_RGB2GRAY); break;
+        case hal::PixelFormat::kBgra32: cv::cvtColor(cv::Mat(h, w, CV_8UC4, f.data, step)(roi), gray, cv::COLOR_BGRA2GRAY); break;
+        default: cv::Mat(h, w, CV_8UC1, f.data, step)(roi).copyTo(gray); break;
     }
 }
 
@@ -112,18 +120,26 @@ struct RegionTracker::Impl {
 
     bool plausible(const Region& r, const cv::Matx33d& h, cv::Size frame, std::vector<cv::Point2f>& poly) const;
     bool propagate(Region& r, cv::Size frame);
+    void build_pyramid(const hal::Frame& f, cv::Rect roi, std::vector<cv::Mat>& pyr);
+    const cv::Mat& full_gray();
     bool match(Region& r, const cv::Mat& gray, bool whole, const std::vector<cv::Point2f>& around);
     void reseed(Region& r, cv::Size frame);
 
     RegionTrackerParams p;
     detail::FeatureDetector keyframe_detector, frame_detector;
     std::vector<Region> regions;
-    cv::Mat gray, prev_gray, mask, shading, detail;
+    // Propagation works in a window around the tracked regions: `window` of this
+    // frame, `prev_window` of the previous one (the same rectangle while it holds them).
+    const hal::Frame* current = nullptr;
+    cv::Size last_size;
+    cv::Rect window_rect, prev_window;
+    cv::Mat gray, window_gray, mask, shading, detail;
+    bool gray_ready = false;
     std::vector<cv::Mat> pyramid, prev_pyramid;
     detail::FeatureSet whole_frame, window;
     bool whole_frame_ready = false;
     detail::KeyframeMatch matched;
-    std::vector<cv::Point2f> lk_next, kept_kf, kept_cur, candidate;
+    std::vector<cv::Point2f> lk_prev, lk_next, kept_kf, kept_cur, candidate;
     std::vector<std::uint8_t> lk_status, inlier_mask;
     std::vector<float> lk_error;
 };
@@ -147,14 +163,32 @@ bool RegionTracker::Impl::plausible(const Region& r, const cv::Matx33d& h, cv::S
     return box.area() > 0 && seen.area() >= kMinVisible * box.area();
 }
 
+void RegionTracker::Impl::build_pyramid(const hal::Frame& f, cv::Rect roi, std::vector<cv::Mat>& pyr) {
+    to_gray(f, roi, window_gray);
+    // LK follows the texture, not the light: the endoscope carries its light, so
+    // shading moves with the camera and would drag the points (a high-pass image).
+    cv::blur(window_gray, shading, cv::Size(kShadingBox, kShadingBox));
+    cv::addWeighted(window_gray, 1.0, shading, -1.0, 128.0, detail);
+    cv::buildOpticalFlowPyramid(detail, pyr, cv::Size(kLkWindow, kLkWindow), kLkLevels);
+}
+
+const cv::Mat& RegionTracker::Impl::full_gray() {
+    if (!gray_ready) to_gray(*current, cv::Rect(0, 0, current->format.width, current->format.height), gray);
+    gray_ready = true;
+    return gray;
+}
+
 bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
-    cv::calcOpticalFlowPyrLK(prev_pyramid, pyramid, r.cur_pts, lk_next, lk_status, lk_error,
+    const cv::Point2f origin(static_cast<float>(window_rect.x), static_cast<float>(window_rect.y));
+    lk_prev.clear();
+    for (const cv::Point2f& q : r.cur_pts) lk_prev.push_back(q - origin);
+    cv::calcOpticalFlowPyrLK(prev_pyramid, pyramid, lk_prev, lk_next, lk_status, lk_error,
                              cv::Size(kLkWindow, kLkWindow), kLkLevels,
                              cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.03));
     kept_kf.clear();
     kept_cur.clear();
     for (std::size_t i = 0; i < lk_next.size(); ++i) {
-        const cv::Point2f q = lk_next[i];
+        const cv::Point2f q = lk_next[i] + origin;
         if (!lk_status[i] || q.x < 0 || q.y < 0 || q.x > frame.width - 1 || q.y > frame.height - 1) continue;
         kept_kf.push_back(r.kf_pts[i]);
         kept_cur.push_back(q);
@@ -170,7 +204,11 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
         r.cur_pts.push_back(kept_cur[i]);
     }
     r.inliers = static_cast<int>(r.kf_pts.size());
-    if (r.inliers < p.min_inliers || !plausible(r, cv::Matx33d(h), frame, candidate)) return false;
+    // Most followed points must agree: a motion too large for LK scatters them, and a
+    // homography fitted to the few that happen to agree would be wrong.
+    if (r.inliers < p.min_inliers || r.inliers < kMinAgreeing * static_cast<double>(lk_next.size()) ||
+        !plausible(r, cv::Matx33d(h), frame, candidate))
+        return false;
     r.homography = cv::Matx33d(h);
     r.polygon = candidate;
     return true;
@@ -221,11 +259,13 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
                 std::to_string(polygon.size());
         return false;
     }
-    cv::Mat g;
-    if (!to_gray(frame, g)) {
+    if (!supported(frame)) {
         error = name + ": unsupported pixel format " + std::string(hal::to_string(frame.format.pixel_format));
         return false;
     }
+    m.current = &frame;
+    m.gray_ready = false;
+    const cv::Mat& g = m.full_gray();
     Impl::Region r;
     r.id = id;
     for (const Point2& v : polygon) {
@@ -274,27 +314,32 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
     r.inliers = static_cast<int>(r.kf_pts.size());
     r.mark_sequence = frame.sequence;
     r.mark_capture_ns = frame.capture_ns;
+    // The next frame propagates from this one, over a window holding this region too.
+    const cv::Rect frame_rect(0, 0, g.cols, g.rows);
+    if (m.last_size != g.size()) m.prev_window = cv::Rect();
+    m.last_size = g.size();
+    m.prev_window = (m.prev_window | expanded_box(r.kf_polygon, 0.25, 48)) & frame_rect;
+    if (m.p.propagate) m.build_pyramid(frame, m.prev_window, m.prev_pyramid);
     if (it != m.regions.end()) *it = std::move(r);
     else m.regions.push_back(std::move(r));
+    m.current = nullptr;
     return true;
 }
 
 std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstimate> out) {
     Impl& m = *impl_;
-    std::swap(m.gray, m.prev_gray);
-    std::swap(m.pyramid, m.prev_pyramid);
+    m.current = &frame;
+    m.gray_ready = false;
     m.whole_frame_ready = false;
-    const bool readable = to_gray(frame, m.gray);
-    const bool resized = !readable || m.gray.size() != m.prev_gray.size();
-    if (readable && m.p.propagate) {
-        // LK follows the texture, not the light: the endoscope carries its light, so
-        // shading moves with the camera and would drag the points (a high-pass image).
-        cv::blur(m.gray, m.shading, cv::Size(kShadingBox, kShadingBox));
-        cv::addWeighted(m.gray, 1.0, m.shading, -1.0, 128.0, m.detail);
-        cv::buildOpticalFlowPyramid(m.detail, m.pyramid, cv::Size(kLkWindow, kLkWindow), kLkLevels);
+    const bool readable = supported(frame);
+    const cv::Size size = readable ? cv::Size(frame.format.width, frame.format.height) : cv::Size();
+    const bool resized = !readable || size != m.last_size;
+    m.last_size = size;
+    const bool can_propagate = readable && m.p.propagate && !resized && !m.prev_window.empty();
+    if (can_propagate) {
+        m.window_rect = m.prev_window;
+        m.build_pyramid(frame, m.window_rect, m.pyramid);
     }
-    if (!readable) m.gray.release();
-    const cv::Size size = m.gray.size();
     std::size_t n = 0;
     for (Impl::Region& r : m.regions) {
         bool found = false, keyframe = false;
@@ -304,28 +349,28 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
             found = true;  // the marking frame itself
         } else {
             const bool was_tracked = r.state == RegionState::kTracked && !resized;
-            if (m.p.propagate && was_tracked && !m.prev_pyramid.empty() && r.cur_pts.size() >= 4)
-                found = m.propagate(r, size);
+            if (can_propagate && was_tracked && r.cur_pts.size() >= 4) found = m.propagate(r, size);
             ++r.since_match;
             const bool due = m.p.redetect_interval > 0 && r.since_match >= m.p.redetect_interval;
             if (!m.p.propagate || r.force_match || !found || due || resized) {
                 // Drift correction near where the region is; recovery over the whole frame.
                 const bool near = was_tracked && (found || !m.p.propagate);
-                bool ok = m.match(r, m.gray, !near, r.polygon);
-                if (!ok && near && !found) ok = m.match(r, m.gray, true, r.polygon);
+                const cv::Mat& g = m.full_gray();
+                bool ok = m.match(r, g, !near, r.polygon);
+                if (!ok && near && !found) ok = m.match(r, g, true, r.polygon);
                 if (ok) {
                     r.since_match = 0;
-                    r.force_match = false;
                     // Propagation that agrees with the keyframe is kept (many more points,
                     // sub-pixel); one that has drifted further is replaced.
                     const double tolerance = kAgreePx * m.frame_detector.pixel_size(size.width);
-                    if (!found || mean_distance(m.candidate, r.polygon) > tolerance) {
+                    if (!found || r.force_match || mean_distance(m.candidate, r.polygon) > tolerance) {
                         r.homography = m.matched.homography;
                         r.polygon = m.candidate;
                         r.inliers = m.matched.inliers;
                         keyframe = true;
                     }
                     m.reseed(r, size);
+                    r.force_match = false;
                 }
                 found = found || ok;
             }
@@ -347,6 +392,26 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
         e.vertices = r.polygon.size();
         for (std::size_t i = 0; i < e.vertices; ++i) e.polygon[i] = {r.polygon[i].x, r.polygon[i].y};
     }
+    // The next frame's window: kept while it holds every tracked region with room to
+    // move, else redrawn around them.
+    cv::Rect tight, next;
+    for (const Impl::Region& r : m.regions) {
+        if (r.state != RegionState::kTracked) continue;
+        tight |= expanded_box(r.polygon, 0, 16);
+        next |= expanded_box(r.polygon, 0.25, 48);
+    }
+    const cv::Rect frame_rect(0, 0, size.width, size.height);
+    tight &= frame_rect;
+    next &= frame_rect;
+    if (!m.p.propagate || next.empty()) {
+        m.prev_window = cv::Rect();
+    } else if (can_propagate && (tight & m.window_rect) == tight) {
+        std::swap(m.pyramid, m.prev_pyramid);  // the same window: this frame's pyramid serves
+    } else {
+        m.prev_window = next;
+        m.build_pyramid(frame, next, m.prev_pyramid);
+    }
+    m.current = nullptr;
     return n;
 }
 
