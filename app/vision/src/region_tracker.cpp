@@ -13,13 +13,13 @@ namespace endotower::vision {
 
 namespace {
 
-constexpr int kLkWindow = 21;
+constexpr int kLkWindow = 15;
 constexpr int kLkLevels = 3;
 // Detections keep the strongest features: matching is brute force, so its cost is
 // the product of the two counts.
 constexpr int kFrameFeatures = 2000;
 constexpr int kKeyframeFeatures = 500;
-constexpr int kTrackCorners = 300;
+constexpr int kTrackCorners = 150;
 constexpr int kShadingBox = 15;
 // Keyframe and propagated polygons closer than this (mean corner distance, working
 // pixels) agree: the propagation is kept.
@@ -304,11 +304,12 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
         return false;
     }
     r.polygon = r.kf_polygon;
-    // LK follows Shi-Tomasi corners as well as the keypoints: many more points than a
-    // small region has descriptors, so propagation stays well determined.
-    cv::goodFeaturesToTrack(g(roi), r.kf_track, kTrackCorners, 0.005, 4, m.mask, 5);
+    // LK follows Shi-Tomasi corners spread over the region: more points than a small
+    // region has descriptors, and points LK locates well. Their number bounds its cost.
+    cv::goodFeaturesToTrack(g(roi), r.kf_track, kTrackCorners, 0.005, std::max(4.0, std::sqrt(std::abs(r.kf_area)) / 20), m.mask, 5);
     for (cv::Point2f& c : r.kf_track) c += cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
-    for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_track.push_back(k.pt);
+    if (r.kf_track.size() < static_cast<std::size_t>(m.p.min_inliers))
+        for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_track.push_back(k.pt);
     r.kf_pts = r.kf_track;
     r.cur_pts = r.kf_pts;
     r.inliers = static_cast<int>(r.kf_pts.size());
