@@ -29,7 +29,7 @@ struct BoardConfig {
     std::string region_descriptor = "sift";  // "sift" | "orb" | "akaze"
     int region_redetect_interval = 10;       // frames; 0 = keyframe matching only when needed
     int region_min_inliers = 10;
-    int region_detect_max_width = 960;
+    int region_detect_max_width = 640;
     bool region_propagate = true;
 
     // sim

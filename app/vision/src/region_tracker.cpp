@@ -17,7 +17,7 @@ constexpr int kLkWindow = 15;
 constexpr int kLkLevels = 3;
 // Detections keep the strongest features: matching is brute force, so its cost is
 // the product of the two counts.
-constexpr int kFrameFeatures = 2000;
+constexpr int kFrameFeatures = 1000;
 constexpr int kKeyframeFeatures = 500;
 constexpr int kTrackCorners = 150;
 constexpr int kShadingBox = 15;

@@ -43,7 +43,7 @@ struct RegionTrackerParams {
     int min_inliers = 10;        // fewer agreeing features: lost
     double ratio = 0.8;          // Lowe's ratio test
     double ransac_px = 3.0;      // RANSAC reprojection threshold, input pixels
-    int detect_max_width = 960;  // keyframe matching on frames downscaled to this width
+    int detect_max_width = 640;  // keyframe matching on frames downscaled to this width
     bool propagate = true;       // false: keyframe matching on every frame (the book's method)
 };
 
