@@ -21,9 +21,14 @@ constexpr int kFrameFeatures = 1000;
 constexpr int kKeyframeFeatures = 500;
 constexpr int kTrackCorners = 150;
 constexpr int kShadingBox = 15;
+constexpr int kLkMaxWidth = 960;
+
+double lk_scale(int frame_width) {
+    return frame_width > kLkMaxWidth ? static_cast<double>(kLkMaxWidth) / frame_width : 1.0;
+}
 // Keyframe and propagated polygons closer than this (mean corner distance, working
 // pixels) agree: the propagation is kept.
-constexpr double kAgreePx = 2.0;
+constexpr double kAgreePx = 1.0;
 // Fraction of the followed points that must fit the propagated homography.
 constexpr double kMinAgreeing = 0.4;
 // A homography may not grow or shrink the region more than this (in area).
@@ -165,6 +170,13 @@ bool RegionTracker::Impl::plausible(const Region& r, const cv::Matx33d& h, cv::S
 
 void RegionTracker::Impl::build_pyramid(const hal::Frame& f, cv::Rect roi, std::vector<cv::Mat>& pyr) {
     to_gray(f, roi, window_gray);
+    // Frames wider than kLkMaxWidth are followed at reduced size: the same texture
+    // scale for LK whatever the input, and a quarter of the work at 1080p.
+    const double s = lk_scale(f.format.width);
+    if (s < 1.0) {
+        cv::resize(window_gray, shading, cv::Size(), s, s, cv::INTER_AREA);
+        std::swap(shading, window_gray);
+    }
     // LK follows the texture, not the light: the endoscope carries its light, so
     // shading moves with the camera and would drag the points (a high-pass image).
     cv::blur(window_gray, shading, cv::Size(kShadingBox, kShadingBox));
@@ -179,22 +191,24 @@ const cv::Mat& RegionTracker::Impl::full_gray() {
 }
 
 bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
-    const cv::Point2f origin(static_cast<float>(window_rect.x), static_cast<float>(window_rect.y));
+    // Window coordinates at LK's scale, pixel centres kept: x' = (x - x0 + 0.5) s - 0.5.
+    const float s = static_cast<float>(lk_scale(frame.width));
+    const cv::Point2f origin(static_cast<float>(window_rect.x) - 0.5f + 0.5f / s, static_cast<float>(window_rect.y) - 0.5f + 0.5f / s);
     lk_prev.clear();
-    for (const cv::Point2f& q : r.cur_pts) lk_prev.push_back(q - origin);
+    for (const cv::Point2f& q : r.cur_pts) lk_prev.push_back((q - origin) * s);
     cv::calcOpticalFlowPyrLK(prev_pyramid, pyramid, lk_prev, lk_next, lk_status, lk_error,
                              cv::Size(kLkWindow, kLkWindow), kLkLevels,
                              cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.03));
     kept_kf.clear();
     kept_cur.clear();
     for (std::size_t i = 0; i < lk_next.size(); ++i) {
-        const cv::Point2f q = lk_next[i] + origin;
+        const cv::Point2f q = lk_next[i] / s + origin;
         if (!lk_status[i] || q.x < 0 || q.y < 0 || q.x > frame.width - 1 || q.y > frame.height - 1) continue;
         kept_kf.push_back(r.kf_pts[i]);
         kept_cur.push_back(q);
     }
     if (kept_kf.size() < static_cast<std::size_t>(std::max(4, p.min_inliers))) return false;
-    const cv::Mat h = cv::findHomography(kept_kf, kept_cur, cv::RANSAC, p.ransac_px, inlier_mask, 500, 0.995);
+    const cv::Mat h = cv::findHomography(kept_kf, kept_cur, cv::RANSAC, p.ransac_px / s, inlier_mask, 500, 0.995);
     if (h.empty()) return false;
     r.kf_pts.clear();
     r.cur_pts.clear();
@@ -351,6 +365,9 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
         } else {
             const bool was_tracked = r.state == RegionState::kTracked && !resized;
             if (can_propagate && was_tracked && r.cur_pts.size() >= 4) found = m.propagate(r, size);
+            // Points lost to LK are put back through the fitted homography before too
+            // few are left (those that re-entered the picture too).
+            if (found && 2 * r.cur_pts.size() < r.kf_track.size()) m.reseed(r, size);
             ++r.since_match;
             const bool due = m.p.redetect_interval > 0 && r.since_match >= m.p.redetect_interval;
             if (!m.p.propagate || r.force_match || !found || due || resized) {
