@@ -13,8 +13,8 @@
 #include <cmath>
 #include <fstream>
 #include <opencv2/core/persistence.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -45,7 +45,8 @@ std::vector<cv::Mat> moving_view(cv::Size s, int n) {
     const cv::Mat scene = vision::test::texture(s.width, s.height, 77);
     std::vector<cv::Mat> frames;
     for (int i = 0; i < n; ++i) {
-        cv::Mat m = cv::getRotationMatrix2D(cv::Point2f(s.width / 2.f, s.height / 2.f), 0.2 * i, 1.0);
+        cv::Mat m =
+            cv::getRotationMatrix2D(cv::Point2f(s.width / 2.f, s.height / 2.f), 0.2 * i, 1.0);
         m.at<double>(0, 2) += 3 * i;
         cv::Mat f;
         cv::warpAffine(scene, f, m, s, cv::INTER_LINEAR, cv::BORDER_REFLECT);
@@ -58,7 +59,8 @@ void report(benchmark::State& state, std::vector<double>& ms, std::size_t tracke
     std::sort(ms.begin(), ms.end());
     state.counters["median_ms"] = ms[ms.size() / 2];
     state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
-    state.counters["tracked_fraction"] = static_cast<double>(tracked) / static_cast<double>(ms.size());
+    state.counters["tracked_fraction"] =
+        static_cast<double>(tracked) / static_cast<double>(ms.size());
 }
 
 // Propagation only: forward and back over 20 frames so the motion never jumps.
@@ -80,7 +82,9 @@ void BM_RegionPropagation1080p(benchmark::State& state) {
         hal::Frame f = view(frames[index], i++);
         const auto t0 = std::chrono::steady_clock::now();
         tracker.track(f, out);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
         tracked += out[0].state == vision::RegionState::kTracked && !out[0].keyframe_match;
     }
     report(state, ms, tracked);
@@ -110,11 +114,14 @@ void BM_RegionKeyframe(benchmark::State& state) {
         ++i;
         const auto t0 = std::chrono::steady_clock::now();
         tracker.track(f, out);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
         tracked += out[0].state == vision::RegionState::kTracked;
     }
     report(state, ms, tracked);
-    state.SetLabel(std::string(vision::to_string(descriptor)) + (whole ? " whole frame" : " near the region"));
+    state.SetLabel(std::string(vision::to_string(descriptor)) +
+                   (whole ? " whole frame" : " near the region"));
 }
 BENCHMARK(BM_RegionKeyframe)
     ->ArgsProduct({{0, 1, 2}, {480, 1080}, {0, 1}})
@@ -130,10 +137,14 @@ struct Pair {
     bool h_maps_b_to_a;
 };
 constexpr Pair kPairs[] = {
-    {"graf1-graf3", "opencv_samples/graf1.png", "opencv_samples/graf3.png", "opencv_samples/H1to3p.xml", false},
-    {"graf", "homography_pairs/grafA.png", "homography_pairs/grafB.png", "homography_pairs/graf_model.txt", true},
-    {"boat", "homography_pairs/boatA.png", "homography_pairs/boatB.png", "homography_pairs/boat_model.txt", true},
-    {"adam", "homography_pairs/adamA.png", "homography_pairs/adamB.png", "homography_pairs/adam_model.txt", true},
+    {"graf1-graf3", "opencv_samples/graf1.png", "opencv_samples/graf3.png",
+     "opencv_samples/H1to3p.xml", false},
+    {"graf", "homography_pairs/grafA.png", "homography_pairs/grafB.png",
+     "homography_pairs/graf_model.txt", true},
+    {"boat", "homography_pairs/boatA.png", "homography_pairs/boatB.png",
+     "homography_pairs/boat_model.txt", true},
+    {"adam", "homography_pairs/adamA.png", "homography_pairs/adamB.png",
+     "homography_pairs/adam_model.txt", true},
 };
 
 bool load_h(const std::string& path, cv::Matx33d& h) {
@@ -152,7 +163,8 @@ bool load_h(const std::string& path, cv::Matx33d& h) {
 
 // Pixel-centre scaling from `from` to `to`: x' = s x + (s - 1) / 2.
 cv::Matx33d scaling(cv::Size from, cv::Size to) {
-    const double sx = static_cast<double>(to.width) / from.width, sy = static_cast<double>(to.height) / from.height;
+    const double sx = static_cast<double>(to.width) / from.width,
+                 sy = static_cast<double>(to.height) / from.height;
     return {sx, 0, (sx - 1) / 2, 0, sy, (sy - 1) / 2, 0, 0, 1};
 }
 
@@ -161,7 +173,8 @@ void BM_RegionPair(benchmark::State& state) {
     const auto descriptor = static_cast<vision::RegionDescriptor>(state.range(1));
     const cv::Size size = state.range(2) == 480 ? cv::Size(640, 480) : cv::Size(1920, 1080);
     const std::string data = std::string(ENDOTOWER_SOURCE_DIR) + "/../shared/data/";
-    cv::Mat a0 = cv::imread(data + pair.a, cv::IMREAD_COLOR), b0 = cv::imread(data + pair.b, cv::IMREAD_COLOR);
+    cv::Mat a0 = cv::imread(data + pair.a, cv::IMREAD_COLOR),
+            b0 = cv::imread(data + pair.b, cv::IMREAD_COLOR);
     cv::Matx33d h;  // A -> B
     if (a0.empty() || b0.empty() || !load_h(data + pair.h, h)) {
         state.SkipWithError("needs ../shared/data (opencv_samples, homography_pairs): absent");
@@ -174,7 +187,8 @@ void BM_RegionPair(benchmark::State& state) {
     const cv::Matx33d truth = scaling(b0.size(), size) * h * scaling(a0.size(), size).inv();
     // The middle of A, 40 % of each side: in view in B for every pair.
     const double w = size.width, hh = size.height;
-    const std::vector<vision::Point2> region{{0.3 * w, 0.3 * hh}, {0.7 * w, 0.3 * hh}, {0.7 * w, 0.7 * hh}, {0.3 * w, 0.7 * hh}};
+    const std::vector<vision::Point2> region{
+        {0.3 * w, 0.3 * hh}, {0.7 * w, 0.3 * hh}, {0.7 * w, 0.7 * hh}, {0.3 * w, 0.7 * hh}};
     std::vector<double> ms;
     double error_sum = 0;
     std::size_t tracked = 0, i = 0;
@@ -190,13 +204,16 @@ void BM_RegionPair(benchmark::State& state) {
         ++i;
         const auto t0 = std::chrono::steady_clock::now();
         tracker.track(f, out);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
         if (out[0].state != vision::RegionState::kTracked) continue;
         ++tracked;
         double e = 0;
         for (std::size_t v = 0; v < region.size(); ++v) {
             const cv::Vec3d q = truth * cv::Vec3d(region[v].x, region[v].y, 1);
-            e += std::hypot(out[0].polygon[v].x - q[0] / q[2], out[0].polygon[v].y - q[1] / q[2]) / 4;
+            e += std::hypot(out[0].polygon[v].x - q[0] / q[2], out[0].polygon[v].y - q[1] / q[2]) /
+                 4;
         }
         error_sum += e;
     }
@@ -204,7 +221,10 @@ void BM_RegionPair(benchmark::State& state) {
     state.counters["corner_error_px"] = tracked > 0 ? error_sum / static_cast<double>(tracked) : -1;
     state.SetLabel(std::string(pair.name) + " " + std::string(vision::to_string(descriptor)));
 }
-BENCHMARK(BM_RegionPair)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}, {480, 1080}})->Unit(benchmark::kMillisecond)->MinTime(1.0);
+BENCHMARK(BM_RegionPair)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}, {480, 1080}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
 
 }  // namespace
 

@@ -36,7 +36,8 @@ double FeatureDetector::pixel_size(int frame_width) const {
     return frame_width > max_width_ ? static_cast<double>(frame_width) / max_width_ : 1.0;
 }
 
-void FeatureDetector::detect(const cv::Mat& gray, cv::Rect roi, const cv::Mat& mask, FeatureSet& out) {
+void FeatureDetector::detect(const cv::Mat& gray, cv::Rect roi, const cv::Mat& mask,
+                             FeatureSet& out) {
     out.clear();
     roi &= cv::Rect(0, 0, gray.cols, gray.rows);
     if (roi.width < 16 || roi.height < 16) return;
@@ -44,7 +45,8 @@ void FeatureDetector::detect(const cv::Mat& gray, cv::Rect roi, const cv::Mat& m
     const cv::Mat window = gray(roi);
     cv::Mat work = window, work_mask = mask;
     if (px > 1.0) {
-        const cv::Size s(std::max(1, static_cast<int>(roi.width / px)), std::max(1, static_cast<int>(roi.height / px)));
+        const cv::Size s(std::max(1, static_cast<int>(roi.width / px)),
+                         std::max(1, static_cast<int>(roi.height / px)));
         cv::resize(window, small_, s, 0, 0, cv::INTER_AREA);
         work = small_;
         if (!mask.empty()) {
@@ -59,7 +61,8 @@ void FeatureDetector::detect(const cv::Mat& gray, cv::Rect roi, const cv::Mat& m
     } else {
         feature_->detectAndCompute(work, work_mask, out.keypoints, out.descriptors);
     }
-    const double sx = static_cast<double>(roi.width) / work.cols, sy = static_cast<double>(roi.height) / work.rows;
+    const double sx = static_cast<double>(roi.width) / work.cols,
+                 sy = static_cast<double>(roi.height) / work.rows;
     for (cv::KeyPoint& k : out.keypoints) {
         // Pixel centres: working pixel (i + 0.5) covers input pixels up to (i + 1) * s.
         k.pt.x = static_cast<float>((k.pt.x + 0.5) * sx - 0.5 + roi.x);
@@ -68,8 +71,8 @@ void FeatureDetector::detect(const cv::Mat& gray, cv::Rect roi, const cv::Mat& m
     }
 }
 
-bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int norm, const MatchParams& p,
-                    KeyframeMatch& out) {
+bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int norm,
+                    const MatchParams& p, KeyframeMatch& out) {
     out.inliers = 0;
     out.keyframe_pts.clear();
     out.frame_pts.clear();
@@ -99,10 +102,11 @@ bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int nor
         out.keyframe_pts.push_back(keyframe.keypoints[m.queryIdx].pt);
         out.frame_pts.push_back(frame.keypoints[m.trainIdx].pt);
     }
-    if (out.keyframe_pts.size() < static_cast<std::size_t>(std::max(4, p.min_inliers))) return false;
+    if (out.keyframe_pts.size() < static_cast<std::size_t>(std::max(4, p.min_inliers)))
+        return false;
     std::vector<std::uint8_t> inlier_mask;
-    const cv::Mat h = cv::findHomography(out.keyframe_pts, out.frame_pts, cv::RANSAC, p.ransac_px, inlier_mask,
-                                         2000, 0.995);
+    const cv::Mat h = cv::findHomography(out.keyframe_pts, out.frame_pts, cv::RANSAC, p.ransac_px,
+                                         inlier_mask, 2000, 0.995);
     if (h.empty()) return false;
     std::size_t n = 0;
     for (std::size_t i = 0; i < inlier_mask.size(); ++i) {

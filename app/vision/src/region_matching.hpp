@@ -56,7 +56,7 @@ struct KeyframeMatch {
 // Brute-force 2-NN matching (norm L2 or Hamming), Lowe's ratio test, then the book's
 // "well-matched pairs": distance below the average of the surviving matches; RANSAC
 // homography. False when fewer than min_inliers pairs survive.
-bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int norm, const MatchParams& p,
-                    KeyframeMatch& out);
+bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int norm,
+                    const MatchParams& p, KeyframeMatch& out);
 
 }  // namespace endotower::vision::detail

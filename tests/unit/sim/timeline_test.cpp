@@ -169,9 +169,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(Timeline, RegionMarksCarryTheirPolygonAndAreNotHandleEvents) {
     Timeline tl;
     std::string error;
-    ASSERT_TRUE(parse_timeline("frame 2 press
-frame 30 region 100,80 220.5,84 -3,+190
-", "e.txt", tl, error))
+    ASSERT_TRUE(parse_timeline("frame 2 press\nframe 30 region 100,80 220.5,84 -3,+190\n", "e.txt", tl, error))
         << error;
     ASSERT_EQ(tl.entries.size(), 2u);
     EXPECT_TRUE(tl.entries[0].region.empty());

@@ -42,7 +42,8 @@ std::vector<Point2> map_polygon(const cv::Matx33d& h, const std::vector<Point2>&
 double corner_error(const RegionEstimate& e, const std::vector<Point2>& truth) {
     EXPECT_EQ(e.vertices, truth.size());
     double s = 0;
-    for (std::size_t i = 0; i < truth.size(); ++i) s += std::hypot(e.polygon[i].x - truth[i].x, e.polygon[i].y - truth[i].y);
+    for (std::size_t i = 0; i < truth.size(); ++i)
+        s += std::hypot(e.polygon[i].x - truth[i].x, e.polygon[i].y - truth[i].y);
     return s / static_cast<double>(truth.size());
 }
 
@@ -72,7 +73,8 @@ TEST_P(EveryDescriptor, RecoversAKnownHomography) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Descriptors, EveryDescriptor,
-                         ::testing::Values(RegionDescriptor::kSift, RegionDescriptor::kOrb, RegionDescriptor::kAkaze),
+                         ::testing::Values(RegionDescriptor::kSift, RegionDescriptor::kOrb,
+                                           RegionDescriptor::kAkaze),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
 TEST(RegionTracker, DescriptorNames) {
@@ -87,8 +89,10 @@ TEST(RegionTracker, DescriptorNames) {
 TEST(RegionTracker, Graf1ToGraf3WithSiftWithinTwoPixels) {
     const fs::path dir = fs::path(ENDOTOWER_SOURCE_DIR) / "../shared/data/opencv_samples";
     if (!fs::exists(dir / "graf1.png") || !fs::exists(dir / "H1to3p.xml"))
-        GTEST_SKIP() << "needs ../shared/data/opencv_samples (graf1.png, graf3.png, H1to3p.xml): absent";
-    cv::Mat a = cv::imread((dir / "graf1.png").string()), b = cv::imread((dir / "graf3.png").string());
+        GTEST_SKIP()
+            << "needs ../shared/data/opencv_samples (graf1.png, graf3.png, H1to3p.xml): absent";
+    cv::Mat a = cv::imread((dir / "graf1.png").string()),
+            b = cv::imread((dir / "graf3.png").string());
     cv::Mat h;
     cv::FileStorage((dir / "H1to3p.xml").string(), cv::FileStorage::READ)["H13"] >> h;
     ASSERT_FALSE(a.empty() || b.empty() || h.empty());
@@ -130,11 +134,14 @@ TEST(RegionTracker, LostWhenTheRegionLeavesThePictureAndRecoveredWhenItReturns) 
         // The region's left edge is at x = 220 - pan: gone once pan > 420 + margin.
         const bool visible = pan[i] <= 280;  // at least 70 % of it in the picture
         if (pan[i] >= 560) {
-            EXPECT_NE(json.find("\"state\":\"lost\""), std::string::npos) << "pan " << pan[i] << ": " << json;
-            EXPECT_EQ(canvas.layer().rect_count, 0u) << "pan " << pan[i] << ": the overlay must be hidden";
+            EXPECT_NE(json.find("\"state\":\"lost\""), std::string::npos)
+                << "pan " << pan[i] << ": " << json;
+            EXPECT_EQ(canvas.layer().rect_count, 0u)
+                << "pan " << pan[i] << ": the overlay must be hidden";
             was_lost = true;
         } else if (visible) {
-            EXPECT_NE(json.find("\"state\":\"tracked\""), std::string::npos) << "pan " << pan[i] << ": " << json;
+            EXPECT_NE(json.find("\"state\":\"tracked\""), std::string::npos)
+                << "pan " << pan[i] << ": " << json;
             EXPECT_GT(canvas.layer().rect_count, 0u) << "pan " << pan[i];
             // In the right place: the marked square moved left by the pan.
             std::array<RegionEstimate, 1> now{};
@@ -182,7 +189,8 @@ TEST(RegionTracker, FourRegionsFollowAMovingView) {
     RegionTracker t({.redetect_interval = 5});
     std::array<RegionEstimate, 8> out{};
     for (int i = 0; i < 16; ++i) {
-        // The view: scale 1 + 0.01 i about (320, 240), the tissue moving 2 px right and 1.5 px down per frame.
+        // The view: scale 1 + 0.01 i about (320, 240), the tissue moving 2 px right and 1.5 px down
+        // per frame.
         const double s = 1.0 + 0.01 * i;
         const cv::Matx33d h(s, 0, 320 * (1 - s) + 2 * i, 0, s, 240 * (1 - s) + 1.5 * i, 0, 0, 1);
         cv::Mat img;
@@ -195,7 +203,8 @@ TEST(RegionTracker, FourRegionsFollowAMovingView) {
         ASSERT_EQ(t.track(view(img, i), out), 4u);
         for (std::size_t r = 0; r < regions.size(); ++r) {
             EXPECT_EQ(out[r].state, RegionState::kTracked) << "frame " << i << " region " << r;
-            EXPECT_LT(corner_error(out[r], map_polygon(h, regions[r])), 1.5) << "frame " << i << " region " << r;
+            EXPECT_LT(corner_error(out[r], map_polygon(h, regions[r])), 1.5)
+                << "frame " << i << " region " << r;
         }
     }
 }
@@ -205,7 +214,9 @@ TEST(RegionTracker, MarkRefusesBadRegionsWithReasons) {
     RegionTracker t;
     std::string error;
     EXPECT_FALSE(t.mark(1, kSquare, view(flat), error));
-    EXPECT_EQ(error, "region 1: only 0 sift features inside the polygon (need 10): mark a larger or more textured region");
+    EXPECT_EQ(error,
+              "region 1: only 0 sift features inside the polygon (need 10): mark a larger or more "
+              "textured region");
     cv::Mat img = texture(640, 480, 3);
     const std::vector<Point2> line{{10, 10}, {100, 100}, {200, 200}};
     EXPECT_FALSE(t.mark(2, line, view(img), error));

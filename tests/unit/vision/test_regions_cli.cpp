@@ -39,7 +39,8 @@ CommandRun run(const std::string& args) {
 }
 
 fs::path temp_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("endotower_regions_" + name + "_" + std::to_string(::getpid()));
+    const fs::path d = fs::temp_directory_path() /
+                       ("endotower_regions_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -52,7 +53,9 @@ fs::path board(const fs::path& dir) {
     return b;
 }
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
+std::string quote(const std::string& s) {
+    return "'" + s + "'";
+}
 
 std::vector<nlohmann::json> read_lines(const fs::path& p) {
     std::vector<nlohmann::json> out;
@@ -68,21 +71,27 @@ class T65Suite : public ::testing::TestWithParam<int> {};
 TEST_P(T65Suite, GoodInEveryFrame) {
     const std::string n = std::to_string(GetParam());
     const fs::path dir = temp_dir("t65_" + n);
-    const CommandRun scene = run("scene --scenario " ENDOTOWER_SOURCE_DIR "/board/sim/scenarios/t65_emulated_" + n +
-                                 ".yaml --out " + (dir / "scene").string());
+    const CommandRun scene =
+        run("scene --scenario " ENDOTOWER_SOURCE_DIR "/board/sim/scenarios/t65_emulated_" + n +
+            ".yaml --out " + (dir / "scene").string());
     ASSERT_EQ(scene.status, 0) << scene.output;
     const nlohmann::json first = read_lines(dir / "scene/truth.jsonl").at(0);
     std::string region;
     for (const auto& v : first["regions"][0]["polygon_px"])
-        region += (region.empty() ? "" : " ") + std::to_string(v[0].get<double>()) + "," + std::to_string(v[1].get<double>());
-    const CommandRun sim = run("sim --board " + board(dir).string() + " --input " + (dir / "scene/frames").string() +
-                               " --out " + (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string() +
-                               " --region " + quote(region));
+        region += (region.empty() ? "" : " ") + std::to_string(v[0].get<double>()) + "," +
+                  std::to_string(v[1].get<double>());
+    const CommandRun sim =
+        run("sim --board " + board(dir).string() + " --input " + (dir / "scene/frames").string() +
+            " --out " + (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string() +
+            " --region " + quote(region));
     ASSERT_EQ(sim.status, 0) << sim.output;
-    const CommandRun eval = run("eval --trace " + (dir / "trace.jsonl").string() + " --truth " +
-                                (dir / "scene/truth.jsonl").string() + " --min-region-good 100% --max-corner-error 3");
+    const CommandRun eval =
+        run("eval --trace " + (dir / "trace.jsonl").string() + " --truth " +
+            (dir / "scene/truth.jsonl").string() + " --min-region-good 100% --max-corner-error 3");
     EXPECT_EQ(eval.status, 0) << eval.output;
-    EXPECT_NE(eval.output.find("regions: 24 region-frames: GOOD 24, OK 0, FAIL 0"), std::string::npos) << eval.output;
+    EXPECT_NE(eval.output.find("regions: 24 region-frames: GOOD 24, OK 0, FAIL 0"),
+              std::string::npos)
+        << eval.output;
     fs::remove_all(dir);
 }
 
@@ -102,15 +111,17 @@ TEST(RegionsCommand, ImagePairOfDifferentSizes) {
     cv::imwrite((dir / "pair/000001.png").string(), b);
     std::ofstream(dir / "h.txt") << "1.25 0 12\n0 1.25 -8\n0 0 1\n";
     const std::string region = "220,160 420,170 410,330 230,320";
-    const CommandRun sim = run("sim --board " + board(dir).string() + " --input " + (dir / "pair").string() +
-                               " --frames " + (dir / "out").string() + " --trace " + (dir / "trace.jsonl").string() +
-                               " --region " + quote(region));
+    const CommandRun sim =
+        run("sim --board " + board(dir).string() + " --input " + (dir / "pair").string() +
+            " --frames " + (dir / "out").string() + " --trace " + (dir / "trace.jsonl").string() +
+            " --region " + quote(region));
     ASSERT_EQ(sim.status, 0) << sim.output;
     const auto lines = read_lines(dir / "trace.jsonl");
     ASSERT_EQ(lines.size(), 2u);
     EXPECT_EQ(lines[1]["regions"][0]["state"], "tracked");
-    const CommandRun eval = run("eval --trace " + (dir / "trace.jsonl").string() + " --homography " +
-                                (dir / "h.txt").string() + " --region " + quote(region) + " --max-corner-error 1");
+    const CommandRun eval =
+        run("eval --trace " + (dir / "trace.jsonl").string() + " --homography " +
+            (dir / "h.txt").string() + " --region " + quote(region) + " --max-corner-error 1");
     EXPECT_EQ(eval.status, 0) << eval.output;
     fs::remove_all(dir);
 }
@@ -121,12 +132,14 @@ TEST(RegionsCommand, TimelineMarksARegionAtItsFrame) {
     const fs::path dir = temp_dir("timeline");
     fs::create_directories(dir / "frames");
     const cv::Mat img = test::texture(640, 480, 5);
-    for (int i = 0; i < 5; ++i) cv::imwrite((dir / "frames" / ("00000" + std::to_string(i) + ".png")).string(), img);
+    for (int i = 0; i < 5; ++i)
+        cv::imwrite((dir / "frames" / ("00000" + std::to_string(i) + ".png")).string(), img);
     std::ofstream(dir / "events.txt") << "frame 2 region 100,100 300,100 300,300 100,300\n"
                                          "t 0.1 region 350,120 560,140 520,400\n";
-    const CommandRun sim = run("sim --board " + board(dir).string() + " --input " + (dir / "frames").string() +
-                               " --out " + (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string() +
-                               " --events " + (dir / "events.txt").string());
+    const CommandRun sim =
+        run("sim --board " + board(dir).string() + " --input " + (dir / "frames").string() +
+            " --out " + (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string() +
+            " --events " + (dir / "events.txt").string());
     ASSERT_EQ(sim.status, 0) << sim.output;
     const auto lines = read_lines(dir / "trace.jsonl");
     ASSERT_EQ(lines.size(), 5u);
@@ -144,12 +157,15 @@ TEST(RegionsCommand, TimelineMarksARegionAtItsFrame) {
 TEST(RegionsCommand, BadRegionsExitTwoWithTheReason) {
     const fs::path dir = temp_dir("bad");
     fs::create_directories(dir / "frames");
-    cv::imwrite((dir / "frames/000000.png").string(), cv::Mat(120, 160, CV_8UC3, cv::Scalar(80, 60, 150)));
-    const std::string base = "sim --board " + board(dir).string() + " --input " + (dir / "frames").string() +
-                             " --out " + (dir / "o.avi").string() + " --region ";
+    cv::imwrite((dir / "frames/000000.png").string(),
+                cv::Mat(120, 160, CV_8UC3, cv::Scalar(80, 60, 150)));
+    const std::string base = "sim --board " + board(dir).string() + " --input " +
+                             (dir / "frames").string() + " --out " + (dir / "o.avi").string() +
+                             " --region ";
     CommandRun r = run(base + quote("10,10 50,10 50"));
     EXPECT_EQ(r.status, 2) << r.output;
-    EXPECT_NE(r.output.find("endotower sim: --region \"10,10 50,10 50\": polygon vertex '50' must be x,y (two numbers)"),
+    EXPECT_NE(r.output.find("endotower sim: --region \"10,10 50,10 50\": polygon vertex '50' must "
+                            "be x,y (two numbers)"),
               std::string::npos)
         << r.output;
     r = run(base + quote("10,10 50,10"));
@@ -158,7 +174,8 @@ TEST(RegionsCommand, BadRegionsExitTwoWithTheReason) {
     // Well formed, but a flat colour has no features to follow.
     r = run(base + quote("10,10 100,10 100,100 10,100"));
     EXPECT_EQ(r.status, 2) << r.output;
-    EXPECT_NE(r.output.find("endotower sim: cannot mark a region: frame 0: region 0: only 0 sift features inside the "
+    EXPECT_NE(r.output.find("endotower sim: cannot mark a region: frame 0: region 0: only 0 sift "
+                            "features inside the "
                             "polygon (need 10)"),
               std::string::npos)
         << r.output;

@@ -19,9 +19,9 @@
 namespace endotower::vision {
 
 struct RegionMark {
-    std::int64_t frame = 0;        // source sequence number (0 = the first frame)
+    std::int64_t frame = 0;  // source sequence number (0 = the first frame)
     int id = 0;
-    std::vector<Point2> polygon;   // in that frame's pixels
+    std::vector<Point2> polygon;  // in that frame's pixels
 };
 
 class RegionStage final : public app::AnalysisStage {

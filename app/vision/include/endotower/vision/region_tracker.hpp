@@ -35,7 +35,8 @@ namespace endotower::vision {
 
 enum class RegionDescriptor { kSift, kOrb, kAkaze };
 std::string_view to_string(RegionDescriptor d);
-bool parse_region_descriptor(std::string_view name, RegionDescriptor& out);  // "sift", "orb", "akaze"
+bool parse_region_descriptor(std::string_view name,
+                             RegionDescriptor& out);  // "sift", "orb", "akaze"
 
 struct RegionTrackerParams {
     RegionDescriptor descriptor = RegionDescriptor::kSift;
@@ -56,7 +57,7 @@ struct RegionEstimate {
     RegionState state = RegionState::kLost;
     std::array<Point2, kMaxVertices> polygon{};  // tracked: this frame; lost: last known
     std::size_t vertices = 0;
-    int inliers = 0;             // features agreeing with the homography this frame
+    int inliers = 0;              // features agreeing with the homography this frame
     bool keyframe_match = false;  // this frame's estimate came from keyframe matching
 };
 
