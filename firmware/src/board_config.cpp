@@ -143,7 +143,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return r.fail(a["tracker"], "analysis.tracker",
                           "the likelihood tracker needs analysis.tool_model (a file of 'endotower train-tool-model')");
     }
-    if (const YAML::Node g = root["analysis"] ? root["analysis"]["regions"] : YAML::Node()) {
+    const YAML::Node analysis = root["analysis"];  // checked to be a mapping above
+    if (const YAML::Node g = analysis ? analysis["regions"] : analysis) {
         if (!r.keys(g, "analysis.regions", {"descriptor", "redetect_interval", "min_inliers", "detect_max_width", "propagate"}) ||
             !r.text(g, "descriptor", "analysis.regions.descriptor", c.region_descriptor) ||
             !r.integer(g, "redetect_interval", "analysis.regions.redetect_interval", 0, 1000, c.region_redetect_interval) ||
