@@ -199,7 +199,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     }
     if (const YAML::Node a = root["analysis"]) {
         if (!r.keys(a, "analysis", {"stage", "tracker", "tool_model", "tool_diameter_mm", "timeout_ms", "virtual_cost_ms",
-                                  "max_overlay_age"}) ||
+                                  "max_overlay_age", "regions"}) ||
             !r.text(a, "stage", "analysis.stage", c.stage) || !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
             !r.text(a, "tool_model", "analysis.tool_model", c.tool_model) ||
             !r.number(a, "tool_diameter_mm", "analysis.tool_diameter_mm", 1, 20, c.tool_diameter_mm) ||
@@ -216,6 +216,20 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (c.tracker == "likelihood" && c.tool_model.empty())
             return r.fail(a["tracker"], "analysis.tracker",
                           "the likelihood tracker needs analysis.tool_model (a file of 'endotower train-tool-model')");
+    }
+    const YAML::Node analysis = root["analysis"];  // checked to be a mapping above
+    if (const YAML::Node g = analysis ? analysis["regions"] : analysis) {
+        if (!r.keys(g, "analysis.regions", {"descriptor", "redetect_interval", "min_inliers", "detect_max_width", "propagate"}) ||
+            !r.text(g, "descriptor", "analysis.regions.descriptor", c.region_descriptor) ||
+            !r.integer(g, "redetect_interval", "analysis.regions.redetect_interval", 0, 1000, c.region_redetect_interval) ||
+            !r.integer(g, "min_inliers", "analysis.regions.min_inliers", 4, 1000, c.region_min_inliers) ||
+            !r.integer(g, "detect_max_width", "analysis.regions.detect_max_width", 160, 8192, c.region_detect_max_width) ||
+            !r.boolean(g, "propagate", "analysis.regions.propagate", c.region_propagate))
+            return false;
+        if (c.region_descriptor != "sift" && c.region_descriptor != "orb" && c.region_descriptor != "akaze")
+            return r.fail(g["descriptor"], "analysis.regions.descriptor",
+                          "unknown descriptor '" + c.region_descriptor +
+                              "' (expected sift, orb or akaze; SURF is patented and not in Debian's OpenCV)");
     }
     if (const YAML::Node s = root["sim"]) {
         if (!r.keys(s, "sim", {"input", "events", "output", "frames", "trace", "realtime", "fps"}) ||

@@ -26,6 +26,12 @@ struct BoardConfig {
     double analysis_timeout_ms = 0.0;
     double analysis_virtual_cost_ms = 0.0;
     int max_overlay_age = 0;
+    // analysis.regions (docs/regions.md): the region tracker's settings
+    std::string region_descriptor = "sift";  // "sift" | "orb" | "akaze"
+    int region_redetect_interval = 10;       // frames; 0 = keyframe matching only when needed
+    int region_min_inliers = 10;
+    int region_detect_max_width = 640;
+    bool region_propagate = true;
 
     // calibration: the scope's calibration file (endotower calibrate), "" = none
     std::string calibration;

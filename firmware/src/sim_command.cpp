@@ -1,5 +1,6 @@
 #include "commands.hpp"
 
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -23,7 +24,9 @@
 #include "endotower/system/monotonic_clock.hpp"
 #include "endotower/system/syscall.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/eval/derived_truth.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
+#include "endotower/vision/region_stage.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
 #ifndef ENDOTOWER_DEFAULT_BOARD
@@ -47,6 +50,7 @@ struct SimArgs {
     std::optional<std::string> input, events, out, frames, trace;
     bool realtime = false, realtime_set = false;
     double latency_ms = -1.0;
+    std::vector<std::string> regions;  // --region, in order (ids 0, 1, ...)
 };
 
 int usage_error(const std::string& m) {
@@ -80,7 +84,7 @@ void print_sim_help() {
     std::printf(
         "usage: endotower sim [--board FILE] [--input FILE|DIR] [--events TIMELINE]\n"
         "                     [--out VIDEO] [--frames DIR] [--trace FILE] [--realtime]\n"
-        "                     [--latency-ms MS]\n\n"
+        "                     [--latency-ms MS] [--region \"x1,y1 x2,y2 x3,y3 ...\"]...\n\n"
         "Runs the appliance on a recording: every frame goes through the fixed-latency\n"
         "video path with the analysis overlay, into a video file and/or PNG frames, with\n"
         "a per-frame trace (JSON Lines, docs/trace.md). Prints a latency summary.\n\n"
@@ -92,7 +96,10 @@ void print_sim_help() {
         "  --trace FILE     per-frame trace, JSON Lines\n"
         "  --realtime       pace at the recording's frame rate on the real clock\n"
         "                   (default: virtual clock, deterministic, as fast as possible)\n"
-        "  --latency-ms MS  capture-to-present latency (default: one frame period)\n\n"
+        "  --latency-ms MS  capture-to-present latency (default: one frame period)\n"
+        "  --region POLY    track a tissue region marked on the first frame (its pixels),\n"
+        "                   repeatable (ids 0, 1, ...; the timeline's 'region' marks follow);\n"
+        "                   the board's analysis.regions sets the method (docs/regions.md)\n\n"
         "Command-line options override the board file. Exit status: 0 done, 1 failed\n"
         "while running, 2 bad usage or input.\n",
         ENDOTOWER_DEFAULT_BOARD);
@@ -114,7 +121,7 @@ int run_sim_command(const Args& args) {
         } else if (k == "--realtime") {
             a.realtime = a.realtime_set = true;
         } else if (k == "--board" || k == "--input" || k == "--events" || k == "--out" ||
-                   k == "--frames" || k == "--trace" || k == "--latency-ms") {
+                   k == "--frames" || k == "--trace" || k == "--latency-ms" || k == "--region") {
             std::string v;
             if (!value(v)) return usage_error("option " + k + " needs a value");
             if (k == "--board") a.board = v;
@@ -123,6 +130,7 @@ int run_sim_command(const Args& args) {
             else if (k == "--out") a.out = v;
             else if (k == "--frames") a.frames = v;
             else if (k == "--trace") a.trace = v;
+            else if (k == "--region") a.regions.push_back(v);
             else if (!parse_ms(v, a.latency_ms))
                 return usage_error("--latency-ms needs a number of milliseconds in 0..1000, got '" + v + "'");
         } else {
@@ -147,6 +155,18 @@ int run_sim_command(const Args& args) {
     if (board.sim_input.empty()) return usage_error("no input: give --input or set sim.input in " + a.board);
     if (board.sim_output.empty() && board.sim_frames.empty())
         return usage_error("no output: give --out and/or --frames (or set sim.output)");
+
+    std::vector<vision::RegionMark> marks;
+    for (const std::string& text : a.regions) {
+        std::vector<eval::Point2> poly;
+        if (!eval::parse_polygon(text, poly, error))
+            return usage_error("--region \"" + text + "\": " + error);
+        if (poly.size() > vision::RegionEstimate::kMaxVertices)
+            return usage_error("--region \"" + text + "\": at most 16 vertices");
+        vision::RegionMark m{0, static_cast<int>(marks.size()), {}};
+        for (const eval::Point2& p : poly) m.polygon.push_back({p.x, p.y});
+        marks.push_back(std::move(m));
+    }
 
     sim::Timeline timeline;
     if (!board.sim_events.empty() && !sim::load_timeline(board.sim_events, timeline, error)) {
@@ -200,6 +220,19 @@ int run_sim_command(const Args& args) {
         return kExitBadInput;
     }
 
+    // Timeline region marks: a time mark applies from the first frame at or after it.
+    for (const sim::TimelineEntry& e : timeline.entries) {
+        if (e.region.empty()) continue;
+        vision::RegionMark m{e.frame, static_cast<int>(marks.size()), {}};
+        if (e.anchor == sim::TimelineEntry::Anchor::kTime)
+            m.frame = static_cast<std::int64_t>(std::ceil(static_cast<double>(e.offset_ns) * fps / 1e9 - 1e-6));
+        for (const sim::TimelinePoint& p : e.region) m.polygon.push_back({p.x, p.y});
+        marks.push_back(std::move(m));
+    }
+    if (marks.size() > vision::RegionTracker::kMaxRegions)
+        return usage_error(std::to_string(marks.size()) + " regions given (--region and the timeline); at most " +
+                           std::to_string(vision::RegionTracker::kMaxRegions));
+
     // Timeline times count from the first frame's capture, which is "now" at start.
     sim::ScriptedInput scripted(timeline, *clock, clock->now(), fps);
     hal::ControlMerge inputs;
@@ -218,6 +251,15 @@ int run_sim_command(const Args& args) {
     vision::LikelihoodToolTracker likelihood(tool_model);
     vision::ToolTracker& tracker = board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(likelihood) : kalman;
     vision::ToolTrackingStage tracking(tracker);
+    vision::RegionTrackerParams region_params;
+    vision::parse_region_descriptor(board.region_descriptor, region_params.descriptor);  // checked by the board parser
+    region_params.redetect_interval = board.region_redetect_interval;
+    region_params.min_inliers = board.region_min_inliers;
+    region_params.detect_max_width = board.region_detect_max_width;
+    region_params.propagate = board.region_propagate;
+    vision::RegionTracker region_tracker(region_params);
+    vision::RegionStage regions(region_tracker);
+    for (vision::RegionMark& m : marks) regions.schedule(std::move(m));
     app::StageChain chain;
     if (board.stage == "status_badge") chain.add(&badge);
     if (board.tracker != "none") chain.add(&tracking);
@@ -245,6 +287,7 @@ int run_sim_command(const Args& args) {
             tracking.set_camera({cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected, board.tool_diameter_mm);
         }
     }
+    if (!a.regions.empty() || marks.size() > 0) chain.add(&regions);
     app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 
     app::PipelineConfig cfg;
@@ -267,6 +310,7 @@ int run_sim_command(const Args& args) {
     g_running = nullptr;
 
     if (!source.warning().empty()) std::fprintf(stderr, "endotower sim: warning: %s\n", source.warning().c_str());
+    for (const std::string& e : regions.errors()) std::fprintf(stderr, "endotower sim: cannot mark a region: %s\n", e.c_str());
     const bool trace_ok = board.sim_trace.empty() || trace.close();
     if (!trace_ok) std::fprintf(stderr, "endotower sim: %s\n", trace.error().c_str());
 
@@ -294,7 +338,9 @@ int run_sim_command(const Args& args) {
         std::fprintf(stderr, "endotower sim: %s\n", s.error.c_str());
         return kExitFailure;
     }
-    return trace_ok ? kExitOk : kExitFailure;
+    if (!trace_ok) return kExitFailure;
+    // A region that could not be marked is bad input (a polygon without texture, outside the frame).
+    return regions.errors().empty() ? kExitOk : kExitBadInput;
 }
 
 }  // namespace endotower::firmware

@@ -28,6 +28,7 @@ ScriptedInput::ScriptedInput(const Timeline& timeline, const hal::Clock& clock, 
     : clock_(clock) {
     events_.reserve(timeline.entries.size());
     for (const TimelineEntry& e : timeline.entries) {
+        if (!e.region.empty()) continue;  // region marks go to the analysis, not the handle
         hal::ControlEvent ev = e.event;
         if (e.anchor == TimelineEntry::Anchor::kFrame) {
             ev.time_ns = frame_time(start_ns, e.frame, fps);

@@ -17,6 +17,7 @@ using hal::ControlEvent;
 
 constexpr std::int64_t kMaxWheelDelta = 1000;
 constexpr int kMaxButton = 7;
+constexpr std::size_t kMaxRegionVertices = 16;
 // Beyond this many seconds the offset would overflow int64 nanoseconds.
 constexpr double kMaxSeconds = 9.0e9;
 
@@ -64,6 +65,21 @@ bool parse_seconds(std::string_view s, hal::Nanos& out) {
     if (!std::isfinite(v) || v < 0.0 || v > kMaxSeconds) return false;
     out = static_cast<hal::Nanos>(std::llround(v * 1e9));
     return true;
+}
+
+// "x,y": two plain decimals (sign and fraction allowed, no exponent, inf or nan).
+bool parse_vertex(std::string_view s, TimelinePoint& out) {
+    const std::size_t comma = s.find(',');
+    if (comma == std::string_view::npos) return false;
+    auto number = [](std::string_view v, double& d) {
+        if (v.empty()) return false;
+        for (char c : v)
+            if (!((c >= '0' && c <= '9') || c == '.' || c == '-' || c == '+')) return false;
+        if (v[0] == '+') v.remove_prefix(1);
+        const auto r = std::from_chars(v.data(), v.data() + v.size(), d, std::chars_format::fixed);
+        return r.ec == std::errc() && r.ptr == v.data() + v.size() && std::isfinite(d) && std::abs(d) <= 1e6;
+    };
+    return number(s.substr(0, comma), out.x) && number(s.substr(comma + 1), out.y);
 }
 
 std::string quoted(std::string_view s) {
@@ -125,7 +141,19 @@ bool parse_timeline(std::string_view text, std::string_view name, Timeline& out,
         ControlEvent& ev = entry.event;
         if (kind.empty()) {
             return fail("missing event after " + std::string(anchor) + ' ' + std::string(value) +
-                        " (expected press, release or wheel)");
+                        " (expected press, release, wheel or region)");
+        } else if (kind == "region") {
+            for (; !arg.empty(); arg = fields.next()) {
+                TimelinePoint v;
+                if (!parse_vertex(arg, v))
+                    return fail("region vertex " + quoted(arg) + " must be x,y (two numbers)");
+                if (entry.region.size() == kMaxRegionVertices)
+                    return fail("a region has at most 16 vertices");
+                entry.region.push_back(v);
+            }
+            if (entry.region.size() < 3)
+                return fail("a region needs at least 3 vertices \"x1,y1 x2,y2 x3,y3\", got " +
+                            std::to_string(entry.region.size()));
         } else if (kind == "press" || kind == "release") {
             ev.kind = kind == "press" ? ControlEvent::Kind::kButtonPress
                                       : ControlEvent::Kind::kButtonRelease;
@@ -145,11 +173,12 @@ bool parse_timeline(std::string_view text, std::string_view name, Timeline& out,
                             quoted(arg));
             ev.delta = static_cast<std::int16_t>(d);
         } else {
-            return fail("unknown event " + quoted(kind) + " (expected press, release or wheel)");
+            return fail("unknown event " + quoted(kind) +
+                        " (expected press, release, wheel or region)");
         }
         if (const std::string_view extra = fields.next(); !extra.empty())
             return fail("unexpected " + quoted(extra) + " after the event");
-        out.entries.push_back(entry);
+        out.entries.push_back(std::move(entry));
     }
     return true;
 }

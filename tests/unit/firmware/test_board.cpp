@@ -47,6 +47,18 @@ TEST(Board, ValuesAndRelativePaths) {
     EXPECT_EQ(b.sim_input, (fs::path(p).parent_path() / "clip.mp4").string());
     EXPECT_EQ(b.sim_output, "/tmp/x.mkv");
     EXPECT_TRUE(b.sim_realtime);
+    EXPECT_EQ(b.region_descriptor, "sift");  // the default
+    const std::string q = write_board("regions.yaml",
+                                      "board: t\n"
+                                      "analysis:\n"
+                                      "  regions: {descriptor: akaze, redetect_interval: 4, min_inliers: 12, "
+                                      "detect_max_width: 640, propagate: false}\n");
+    ASSERT_TRUE(load_board(q, b, err)) << err;
+    EXPECT_EQ(b.region_descriptor, "akaze");
+    EXPECT_EQ(b.region_redetect_interval, 4);
+    EXPECT_EQ(b.region_min_inliers, 12);
+    EXPECT_EQ(b.region_detect_max_width, 640);
+    EXPECT_FALSE(b.region_propagate);
 }
 
 TEST(Board, CalibrationPathIsResolvedAgainstTheBoardFile) {
@@ -79,6 +91,15 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\nsim:\n  realtime: maybe\n", "3: field 'sim.realtime': expected true or false, got 'maybe'"},
         {"board: t\nanalysis:\n  max_overlay_age: 2.5\n", "3: field 'analysis.max_overlay_age': expected an integer"},
         {"video: {latency_ms: 1}\n", "1: field 'board': missing (the board's name)"},
+        {"board: t\nanalysis:\n  regions:\n    descriptor: surf\n",
+         "4: field 'analysis.regions.descriptor': unknown descriptor 'surf' (expected sift, orb or akaze; SURF is "
+         "patented and not in Debian's OpenCV)"},
+        {"board: t\nanalysis:\n  regions: {min_inliers: 2}\n",
+         "3: field 'analysis.regions.min_inliers': must be between 4 and 1000, got 2"},
+        {"board: t\nanalysis:\n  regions:\n    redetect: 5\n",
+         "4: field 'analysis.regions.redetect': unknown key (expected one of: descriptor, redetect_interval, "
+         "min_inliers, detect_max_width, propagate)"},
+        {"board: t\nanalysis:\n  regions: sift\n", "3: field 'analysis.regions': expected a mapping of keys"},
         {"board: t\nvideo: [1, 2\n", "3: not valid YAML: end of sequence flow not found"},
         {"board: t\n? [a, b]\n: c\n", "2: field '(top level)': a key must be a plain name"},
         {"board: t\nsim:\n  ? {x: 1}\n  : y\n", "3: field 'sim': a key must be a plain name"},

@@ -122,7 +122,7 @@ TEST_P(TimelineErrors, NameFileLineAndField) {
 INSTANTIATE_TEST_SUITE_P(
     Messages, TimelineErrors,
     ::testing::Values(
-        BadLine{"frame 3 presss", "unknown event 'presss' (expected press, release or wheel)"},
+        BadLine{"frame 3 presss", "unknown event 'presss' (expected press, release, wheel or region)"},
         BadLine{"frame -2 press", "frame index '-2' must be a non-negative integer"},
         BadLine{"frame 12x press", "frame index '12x' must be a non-negative integer"},
         BadLine{"frame 1.5 press", "frame index '1.5' must be a non-negative integer"},
@@ -136,8 +136,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadLine{"t 1.2.3 press", "time '1.2.3' must be a number of seconds >= 0 (like 1.250)"},
         BadLine{"t", "'t' needs a time in seconds (number >= 0)"},
         BadLine{"at 3 press", "unknown anchor 'at' (expected 'frame N' or 't SECONDS')"},
-        BadLine{"frame 3", "missing event after frame 3 (expected press, release or wheel)"},
-        BadLine{"t 1.5   # later", "missing event after t 1.5 (expected press, release or wheel)"},
+        BadLine{"frame 3", "missing event after frame 3 (expected press, release, wheel or region)"},
+        BadLine{"t 1.5   # later", "missing event after t 1.5 (expected press, release, wheel or region)"},
         BadLine{"frame 3 wheel x",
                 "wheel delta must be a non-zero integer in -1000..1000, got 'x'"},
         BadLine{"frame 3 wheel 0",
@@ -156,14 +156,39 @@ INSTANTIATE_TEST_SUITE_P(
         BadLine{"frame 3 press one", "button 'one' must be an integer in 0..7"},
         BadLine{"frame 3 press 1 2", "unexpected '2' after the event"},
         BadLine{"frame 3 wheel 2 extra", "unexpected 'extra' after the event"},
-        BadLine{"frame 3 release 0 0", "unexpected '0' after the event"}));
+        BadLine{"frame 3 release 0 0", "unexpected '0' after the event"},
+        BadLine{"frame 3 region 1,2 3,4", "a region needs at least 3 vertices \"x1,y1 x2,y2 x3,y3\", got 2"},
+        BadLine{"frame 3 region", "a region needs at least 3 vertices \"x1,y1 x2,y2 x3,y3\", got 0"},
+        BadLine{"frame 3 region 1,2 3,4 5", "region vertex '5' must be x,y (two numbers)"},
+        BadLine{"frame 3 region 1,2 3,4 5,y", "region vertex '5,y' must be x,y (two numbers)"},
+        BadLine{"frame 3 region 1,2 3,4 nan,1", "region vertex 'nan,1' must be x,y (two numbers)"},
+        BadLine{"frame 3 region 1,2 3,4 1e3,1", "region vertex '1e3,1' must be x,y (two numbers)"},
+        BadLine{"t 1 region 0,0 1,0 2,0 3,0 4,0 5,0 6,0 7,0 8,0 9,0 10,0 11,0 12,0 13,0 14,0 15,0 16,0",
+                "a region has at most 16 vertices"}));
+
+TEST(Timeline, RegionMarksCarryTheirPolygonAndAreNotHandleEvents) {
+    Timeline tl;
+    std::string error;
+    ASSERT_TRUE(parse_timeline("frame 2 press\nframe 30 region 100,80 220.5,84 -3,+190\n", "e.txt", tl, error))
+        << error;
+    ASSERT_EQ(tl.entries.size(), 2u);
+    EXPECT_TRUE(tl.entries[0].region.empty());
+    const TimelineEntry& r = tl.entries[1];
+    EXPECT_EQ(r.frame, 30);
+    EXPECT_EQ(r.line, 2);
+    ASSERT_EQ(r.region.size(), 3u);
+    EXPECT_EQ(r.region[1].x, 220.5);
+    EXPECT_EQ(r.region[1].y, 84.0);
+    EXPECT_EQ(r.region[2].x, -3.0);
+    EXPECT_EQ(r.region[2].y, 190.0);
+}
 
 TEST(Timeline, ErrorLineCountsCrlfBlankAndCommentLines) {
     Timeline tl;
     std::string error;
     EXPECT_FALSE(
         parse_timeline("\r\n# a\r\n\r\nframe 1 press\r\nframe 2 presss\r\n", "dos.txt", tl, error));
-    EXPECT_EQ(error, "dos.txt:5: unknown event 'presss' (expected press, release or wheel)");
+    EXPECT_EQ(error, "dos.txt:5: unknown event 'presss' (expected press, release, wheel or region)");
 }
 
 TEST(Timeline, LoadsAFileAndNamesItInMessages) {

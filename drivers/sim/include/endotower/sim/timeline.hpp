@@ -5,9 +5,12 @@
 //   frame 20   release 0
 //   t 1.250    wheel +2           1.250 s after the first frame, 2 detents
 //   t 2.0      press 1            button 1
+//   frame 30   region 100,80 220,84 210,190 96,180
+//                                 marks a tissue region (polygon in that frame's pixels)
 //
 // "frame N" or "t SECONDS" (>= 0), then press|release [BUTTON 0-7] or wheel DELTA
-// (non-zero integer, -1000..1000). Errors name the file, line and field.
+// (non-zero integer, -1000..1000) or region X,Y X,Y X,Y ... (3 to 16 vertices, finite
+// numbers; regions get ids in file order). Errors name the file, line and field.
 #pragma once
 
 #include <string>
@@ -18,12 +21,17 @@
 
 namespace endotower::sim {
 
+struct TimelinePoint {
+    double x = 0, y = 0;
+};
+
 struct TimelineEntry {
     enum class Anchor { kFrame, kTime };
     Anchor anchor = Anchor::kFrame;
     std::int64_t frame = 0;     // with kFrame
     hal::Nanos offset_ns = 0;   // with kTime, from the first frame's capture
     hal::ControlEvent event{};  // time_ns is filled when the timeline is scheduled
+    std::vector<TimelinePoint> region;  // a region mark when not empty (event unused)
     int line = 0;               // 1-based line in the file, for messages
 };
 

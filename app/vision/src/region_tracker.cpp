@@ -1,0 +1,485 @@
+#include "endotower/vision/region_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <vector>
+
+#include "region_matching.hpp"
+
+namespace endotower::vision {
+
+namespace {
+
+constexpr int kLkWindow = 15;
+constexpr int kLkLevels = 3;
+// Detections keep the strongest features: matching is brute force, so its cost is
+// the product of the two counts.
+constexpr int kFrameFeatures = 1000;
+constexpr int kKeyframeFeatures = 500;
+constexpr int kTrackCorners = 150;
+constexpr int kShadingBox = 15;
+constexpr int kLkMaxWidth = 960;
+
+double lk_scale(int frame_width) {
+    return frame_width > kLkMaxWidth ? static_cast<double>(kLkMaxWidth) / frame_width : 1.0;
+}
+// Keyframe and propagated polygons closer than this (mean corner distance, working
+// pixels) agree: the propagation is kept.
+constexpr double kAgreePx = 1.0;
+// Fraction of the followed points that must fit the propagated homography.
+constexpr double kMinAgreeing = 0.4;
+// A homography may not grow or shrink the region more than this (in area).
+constexpr double kMaxAreaRatio = 25.0;
+// Below this fraction of its bounding box in the picture a region counts as gone.
+constexpr double kMinVisible = 0.2;
+
+bool supported(const hal::Frame& f) {
+    using hal::PixelFormat;
+    const PixelFormat p = f.format.pixel_format;
+    return f.data != nullptr && f.format.width > 0 && f.format.height > 0 &&
+           (p == PixelFormat::kBgr24 || p == PixelFormat::kRgb24 || p == PixelFormat::kBgra32 ||
+            p == PixelFormat::kGray8);
+}
+
+// The grey image of `roi` of a supported frame.
+void to_gray(const hal::Frame& f, cv::Rect roi, cv::Mat& gray) {
+    const int w = f.format.width, h = f.format.height;
+    const auto step = static_cast<std::size_t>(f.format.stride);
+    switch (f.format.pixel_format) {
+        case hal::PixelFormat::kBgr24:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step)(roi), gray, cv::COLOR_BGR2GRAY);
+            break;
+        case hal::PixelFormat::kRgb24:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step)(roi), gray, cv::COLOR_RGB2GRAY);
+            break;
+        case hal::PixelFormat::kBgra32:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC4, f.data, step)(roi), gray, cv::COLOR_BGRA2GRAY);
+            break;
+        default:
+            cv::Mat(h, w, CV_8UC1, f.data, step)(roi).copyTo(gray);
+            break;
+    }
+}
+
+double signed_area(const std::vector<cv::Point2f>& p) {
+    double a = 0;
+    for (std::size_t i = 0, j = p.size() - 1; i < p.size(); j = i++)
+        a += double(p[j].x) * p[i].y - double(p[i].x) * p[j].y;
+    return a / 2;
+}
+
+double mean_distance(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+    double s = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) s += cv::norm(a[i] - b[i]);
+    return s / static_cast<double>(a.size());
+}
+
+cv::Rect2f bounds(const std::vector<cv::Point2f>& poly) {
+    float x0 = poly[0].x, y0 = poly[0].y, x1 = x0, y1 = y0;
+    for (const cv::Point2f& p : poly)
+        x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
+        y1 = std::max(y1, p.y);
+    return {x0, y0, x1 - x0, y1 - y0};
+}
+
+cv::Rect expanded_box(const std::vector<cv::Point2f>& poly, double grow, int margin) {
+    const cv::Rect2f b = bounds(poly);
+    const double gx = b.width * grow + margin, gy = b.height * grow + margin;
+    return cv::Rect(static_cast<int>(std::floor(b.x - gx)), static_cast<int>(std::floor(b.y - gy)),
+                    static_cast<int>(std::ceil(b.width + 2 * gx)) + 1,
+                    static_cast<int>(std::ceil(b.height + 2 * gy)) + 1);
+}
+
+}  // namespace
+
+std::string_view to_string(RegionDescriptor d) {
+    switch (d) {
+        case RegionDescriptor::kSift:
+            return "sift";
+        case RegionDescriptor::kOrb:
+            return "orb";
+        case RegionDescriptor::kAkaze:
+            return "akaze";
+    }
+    return "?";
+}
+
+bool parse_region_descriptor(std::string_view name, RegionDescriptor& out) {
+    for (RegionDescriptor d :
+         {RegionDescriptor::kSift, RegionDescriptor::kOrb, RegionDescriptor::kAkaze})
+        if (name == to_string(d)) return out = d, true;
+    return false;
+}
+
+std::string_view to_string(RegionState s) {
+    return s == RegionState::kTracked ? "tracked" : "lost";
+}
+
+struct RegionTracker::Impl {
+    struct Region {
+        int id = 0;
+        std::vector<cv::Point2f> kf_polygon;  // the marking frame's pixels
+        double kf_area = 0;
+        bool convex = false;
+        detail::FeatureSet keyframe;
+        std::vector<cv::Point2f> kf_track;  // corners and keypoints that LK follows
+        RegionState state = RegionState::kTracked;
+        cv::Matx33d homography = cv::Matx33d::eye();  // keyframe -> current frame
+        std::vector<cv::Point2f> polygon;             // current, or last known while lost
+        std::vector<cv::Point2f> kf_pts, cur_pts;     // features followed frame to frame
+        int inliers = 0;
+        int since_match = 0;
+        bool force_match = true;  // the next frame is matched against the keyframe
+        std::uint64_t mark_sequence = 0;
+        hal::Nanos mark_capture_ns = 0;
+    };
+
+    explicit Impl(RegionTrackerParams params)
+        : p(params),
+          keyframe_detector(p.descriptor, p.detect_max_width, kKeyframeFeatures),
+          frame_detector(p.descriptor, p.detect_max_width, kFrameFeatures) {}
+
+    bool plausible(const Region& r, const cv::Matx33d& h, cv::Size frame,
+                   std::vector<cv::Point2f>& poly) const;
+    bool propagate(Region& r, cv::Size frame);
+    void build_pyramid(const hal::Frame& f, cv::Rect roi, std::vector<cv::Mat>& pyr);
+    const cv::Mat& full_gray();
+    bool match(Region& r, const cv::Mat& gray, bool whole, const std::vector<cv::Point2f>& around);
+    void reseed(Region& r, cv::Size frame);
+
+    RegionTrackerParams p;
+    detail::FeatureDetector keyframe_detector, frame_detector;
+    std::vector<Region> regions;
+    // Propagation works in a window around the tracked regions: `window` of this
+    // frame, `prev_window` of the previous one (the same rectangle while it holds them).
+    const hal::Frame* current = nullptr;
+    cv::Size last_size;
+    cv::Rect window_rect, prev_window;
+    cv::Mat gray, window_gray, mask, shading, detail;
+    bool gray_ready = false;
+    std::vector<cv::Mat> pyramid, prev_pyramid;
+    detail::FeatureSet whole_frame, window;
+    bool whole_frame_ready = false;
+    detail::KeyframeMatch matched;
+    std::vector<cv::Point2f> lk_prev, lk_next, kept_kf, kept_cur, candidate;
+    std::vector<std::uint8_t> lk_status, inlier_mask;
+    std::vector<float> lk_error;
+};
+
+bool RegionTracker::Impl::plausible(const Region& r, const cv::Matx33d& h, cv::Size frame,
+                                    std::vector<cv::Point2f>& poly) const {
+    poly.clear();
+    for (const cv::Point2f& v : r.kf_polygon) {
+        const double w = h(2, 0) * v.x + h(2, 1) * v.y + h(2, 2);
+        if (!(w > 1e-9)) return false;  // a vertex behind the view: a degenerate fit
+        const double x = (h(0, 0) * v.x + h(0, 1) * v.y + h(0, 2)) / w,
+                     y = (h(1, 0) * v.x + h(1, 1) * v.y + h(1, 2)) / w;
+        if (!std::isfinite(x) || !std::isfinite(y)) return false;
+        poly.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    }
+    const double area = signed_area(poly);
+    const double ratio = area / r.kf_area;  // negative: mirrored
+    if (!(ratio > 1.0 / kMaxAreaRatio && ratio < kMaxAreaRatio)) return false;
+    if (r.convex && !cv::isContourConvex(poly)) return false;
+    const cv::Rect2f box = bounds(poly);
+    const cv::Rect2f seen =
+        box & cv::Rect2f(0, 0, static_cast<float>(frame.width), static_cast<float>(frame.height));
+    return box.area() > 0 && seen.area() >= kMinVisible * box.area();
+}
+
+void RegionTracker::Impl::build_pyramid(const hal::Frame& f, cv::Rect roi,
+                                        std::vector<cv::Mat>& pyr) {
+    to_gray(f, roi, window_gray);
+    // Frames wider than kLkMaxWidth are followed at reduced size: the same texture
+    // scale for LK whatever the input, and a quarter of the work at 1080p.
+    const double s = lk_scale(f.format.width);
+    if (s < 1.0) {
+        cv::resize(window_gray, shading, cv::Size(), s, s, cv::INTER_AREA);
+        std::swap(shading, window_gray);
+    }
+    // LK follows the texture, not the light: the endoscope carries its light, so
+    // shading moves with the camera and would drag the points (a high-pass image).
+    cv::blur(window_gray, shading, cv::Size(kShadingBox, kShadingBox));
+    cv::addWeighted(window_gray, 1.0, shading, -1.0, 128.0, detail);
+    cv::buildOpticalFlowPyramid(detail, pyr, cv::Size(kLkWindow, kLkWindow), kLkLevels);
+}
+
+const cv::Mat& RegionTracker::Impl::full_gray() {
+    if (!gray_ready)
+        to_gray(*current, cv::Rect(0, 0, current->format.width, current->format.height), gray);
+    gray_ready = true;
+    return gray;
+}
+
+bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
+    // Window coordinates at LK's scale, pixel centres kept: x' = (x - x0 + 0.5) s - 0.5.
+    const float s = static_cast<float>(lk_scale(frame.width));
+    const cv::Point2f origin(static_cast<float>(window_rect.x) - 0.5f + 0.5f / s,
+                             static_cast<float>(window_rect.y) - 0.5f + 0.5f / s);
+    lk_prev.clear();
+    for (const cv::Point2f& q : r.cur_pts) lk_prev.push_back((q - origin) * s);
+    cv::calcOpticalFlowPyrLK(
+        prev_pyramid, pyramid, lk_prev, lk_next, lk_status, lk_error,
+        cv::Size(kLkWindow, kLkWindow), kLkLevels,
+        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.03));
+    kept_kf.clear();
+    kept_cur.clear();
+    for (std::size_t i = 0; i < lk_next.size(); ++i) {
+        const cv::Point2f q = lk_next[i] / s + origin;
+        if (!lk_status[i] || q.x < 0 || q.y < 0 || q.x > frame.width - 1 || q.y > frame.height - 1)
+            continue;
+        kept_kf.push_back(r.kf_pts[i]);
+        kept_cur.push_back(q);
+    }
+    if (kept_kf.size() < static_cast<std::size_t>(std::max(4, p.min_inliers))) return false;
+    const cv::Mat h =
+        cv::findHomography(kept_kf, kept_cur, cv::RANSAC, p.ransac_px / s, inlier_mask, 500, 0.995);
+    if (h.empty()) return false;
+    r.kf_pts.clear();
+    r.cur_pts.clear();
+    for (std::size_t i = 0; i < inlier_mask.size(); ++i) {
+        if (!inlier_mask[i]) continue;
+        r.kf_pts.push_back(kept_kf[i]);
+        r.cur_pts.push_back(kept_cur[i]);
+    }
+    r.inliers = static_cast<int>(r.kf_pts.size());
+    // Most followed points must agree: a motion too large for LK scatters them, and a
+    // homography fitted to the few that happen to agree would be wrong.
+    if (r.inliers < p.min_inliers ||
+        r.inliers < kMinAgreeing * static_cast<double>(lk_next.size()) ||
+        !plausible(r, cv::Matx33d(h), frame, candidate))
+        return false;
+    r.homography = cv::Matx33d(h);
+    r.polygon = candidate;
+    return true;
+}
+
+// Keyframe matching in a window around `around` (1.5x its size), or the whole frame.
+// The result is left in `matched` and `candidate` (its polygon).
+bool RegionTracker::Impl::match(Region& r, const cv::Mat& g, bool whole,
+                                const std::vector<cv::Point2f>& around) {
+    const detail::MatchParams mp{p.ratio, p.ransac_px * frame_detector.pixel_size(g.cols),
+                                 p.min_inliers};
+    detail::FeatureSet* features = &whole_frame;
+    if (whole) {
+        if (!whole_frame_ready)
+            frame_detector.detect(g, cv::Rect(0, 0, g.cols, g.rows), cv::Mat(), whole_frame);
+        whole_frame_ready = true;
+    } else {
+        frame_detector.detect(g, expanded_box(around, 0.25, 16), cv::Mat(), window);
+        features = &window;
+    }
+    return detail::match_keyframe(r.keyframe, *features, frame_detector.norm(), mp, matched) &&
+           plausible(r, matched.homography, g.size(), candidate);
+}
+
+void RegionTracker::Impl::reseed(Region& r, cv::Size frame) {
+    // All the keyframe's points through the region's homography: points that left the
+    // picture and came back are followed again, and the frame-to-frame drift of single
+    // points is dropped.
+    r.kf_pts.clear();
+    r.cur_pts.clear();
+    const cv::Matx33d& h = r.homography;
+    for (const cv::Point2f& v : r.kf_track) {
+        const double w = h(2, 0) * v.x + h(2, 1) * v.y + h(2, 2);
+        const double x = (h(0, 0) * v.x + h(0, 1) * v.y + h(0, 2)) / w,
+                     y = (h(1, 0) * v.x + h(1, 1) * v.y + h(1, 2)) / w;
+        if (!(x >= 0 && y >= 0 && x <= frame.width - 1 && y <= frame.height - 1)) continue;
+        r.kf_pts.push_back(v);
+        r.cur_pts.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    }
+}
+
+RegionTracker::RegionTracker(RegionTrackerParams params) : impl_(std::make_unique<Impl>(params)) {}
+RegionTracker::~RegionTracker() = default;
+const RegionTrackerParams& RegionTracker::params() const {
+    return impl_->p;
+}
+std::size_t RegionTracker::size() const {
+    return impl_->regions.size();
+}
+
+bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Frame& frame,
+                         std::string& error) {
+    Impl& m = *impl_;
+    const std::string name = "region " + std::to_string(id);
+    if (polygon.size() < 3 || polygon.size() > RegionEstimate::kMaxVertices) {
+        error = name + ": a polygon needs 3 to " + std::to_string(RegionEstimate::kMaxVertices) +
+                " vertices, got " + std::to_string(polygon.size());
+        return false;
+    }
+    if (!supported(frame)) {
+        error = name + ": unsupported pixel format " +
+                std::string(hal::to_string(frame.format.pixel_format));
+        return false;
+    }
+    m.current = &frame;
+    m.gray_ready = false;
+    const cv::Mat& g = m.full_gray();
+    Impl::Region r;
+    r.id = id;
+    for (const Point2& v : polygon) {
+        if (!std::isfinite(v.x) || !std::isfinite(v.y)) {
+            error = name + ": vertex coordinates must be finite numbers";
+            return false;
+        }
+        r.kf_polygon.emplace_back(static_cast<float>(v.x), static_cast<float>(v.y));
+    }
+    r.kf_area = signed_area(r.kf_polygon);
+    r.convex = cv::isContourConvex(r.kf_polygon);
+    const cv::Rect inside = expanded_box(r.kf_polygon, 0, 0) & cv::Rect(0, 0, g.cols, g.rows);
+    if (std::abs(r.kf_area) < 64 || inside.area() < 64) {
+        error = name + ": the polygon is degenerate (area " + std::to_string(std::abs(r.kf_area)) +
+                " px) or outside the " + std::to_string(g.cols) + "x" + std::to_string(g.rows) +
+                " frame";
+        return false;
+    }
+    auto it = std::find_if(m.regions.begin(), m.regions.end(),
+                           [id](const Impl::Region& x) { return x.id == id; });
+    if (it == m.regions.end() && m.regions.size() >= kMaxRegions) {
+        error = name + ": at most " + std::to_string(kMaxRegions) + " regions are tracked at once";
+        return false;
+    }
+    // The mask, with a margin of context around it so descriptors near the outline see
+    // their neighbourhood; features themselves only inside (the book's region mask).
+    const cv::Rect roi = expanded_box(r.kf_polygon, 0, 32) & cv::Rect(0, 0, g.cols, g.rows);
+    m.mask.create(roi.size(), CV_8UC1);
+    m.mask.setTo(0);
+    std::vector<cv::Point> outline;
+    for (const cv::Point2f& v : r.kf_polygon)
+        outline.emplace_back(cvRound(v.x - roi.x), cvRound(v.y - roi.y));
+    cv::fillPoly(m.mask, std::vector<std::vector<cv::Point>>{outline}, cv::Scalar(255));
+    m.keyframe_detector.detect(g, roi, m.mask, r.keyframe);
+    if (r.keyframe.keypoints.size() < static_cast<std::size_t>(std::max(4, m.p.min_inliers))) {
+        error = name + ": only " + std::to_string(r.keyframe.keypoints.size()) + " " +
+                std::string(to_string(m.p.descriptor)) + " features inside the polygon (need " +
+                std::to_string(std::max(4, m.p.min_inliers)) +
+                "): mark a larger or more textured region";
+        return false;
+    }
+    r.polygon = r.kf_polygon;
+    // LK follows Shi-Tomasi corners spread over the region: more points than a small
+    // region has descriptors, and points LK locates well. Their number bounds its cost.
+    cv::goodFeaturesToTrack(g(roi), r.kf_track, kTrackCorners, 0.005,
+                            std::max(4.0, std::sqrt(std::abs(r.kf_area)) / 20), m.mask, 5);
+    for (cv::Point2f& c : r.kf_track)
+        c += cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
+    if (r.kf_track.size() < static_cast<std::size_t>(m.p.min_inliers))
+        for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_track.push_back(k.pt);
+    r.kf_pts = r.kf_track;
+    r.cur_pts = r.kf_pts;
+    r.inliers = static_cast<int>(r.kf_pts.size());
+    r.mark_sequence = frame.sequence;
+    r.mark_capture_ns = frame.capture_ns;
+    // The next frame propagates from this one, over a window holding this region too.
+    const cv::Rect frame_rect(0, 0, g.cols, g.rows);
+    if (m.last_size != g.size()) m.prev_window = cv::Rect();
+    m.last_size = g.size();
+    m.prev_window = (m.prev_window | expanded_box(r.kf_polygon, 0.25, 48)) & frame_rect;
+    if (m.p.propagate) m.build_pyramid(frame, m.prev_window, m.prev_pyramid);
+    if (it != m.regions.end())
+        *it = std::move(r);
+    else
+        m.regions.push_back(std::move(r));
+    m.current = nullptr;
+    return true;
+}
+
+std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstimate> out) {
+    Impl& m = *impl_;
+    m.current = &frame;
+    m.gray_ready = false;
+    m.whole_frame_ready = false;
+    const bool readable = supported(frame);
+    const cv::Size size = readable ? cv::Size(frame.format.width, frame.format.height) : cv::Size();
+    const bool resized = !readable || size != m.last_size;
+    m.last_size = size;
+    const bool can_propagate = readable && m.p.propagate && !resized && !m.prev_window.empty();
+    if (can_propagate) {
+        m.window_rect = m.prev_window;
+        m.build_pyramid(frame, m.window_rect, m.pyramid);
+    }
+    std::size_t n = 0;
+    for (Impl::Region& r : m.regions) {
+        bool found = false, keyframe = false;
+        if (!readable) {
+            found = false;
+        } else if (frame.sequence == r.mark_sequence && frame.capture_ns == r.mark_capture_ns) {
+            found = true;  // the marking frame itself
+        } else {
+            const bool was_tracked = r.state == RegionState::kTracked && !resized;
+            if (can_propagate && was_tracked && r.cur_pts.size() >= 4) found = m.propagate(r, size);
+            // Points lost to LK are put back through the fitted homography before too
+            // few are left (those that re-entered the picture too).
+            if (found && 2 * r.cur_pts.size() < r.kf_track.size()) m.reseed(r, size);
+            ++r.since_match;
+            const bool due = m.p.redetect_interval > 0 && r.since_match >= m.p.redetect_interval;
+            if (!m.p.propagate || r.force_match || !found || due || resized) {
+                // Drift correction near where the region is; recovery over the whole frame.
+                const bool near = was_tracked && (found || !m.p.propagate);
+                const cv::Mat& g = m.full_gray();
+                bool ok = m.match(r, g, !near, r.polygon);
+                if (!ok && near && !found) ok = m.match(r, g, true, r.polygon);
+                if (ok) {
+                    r.since_match = 0;
+                    // Propagation that agrees with the keyframe is kept (many more points,
+                    // sub-pixel); one that has drifted further is replaced.
+                    const double tolerance = kAgreePx * m.frame_detector.pixel_size(size.width);
+                    if (!found || r.force_match ||
+                        mean_distance(m.candidate, r.polygon) > tolerance) {
+                        r.homography = m.matched.homography;
+                        r.polygon = m.candidate;
+                        r.inliers = m.matched.inliers;
+                        keyframe = true;
+                    }
+                    m.reseed(r, size);
+                    r.force_match = false;
+                }
+                found = found || ok;
+            }
+        }
+        if (found) {
+            r.state = RegionState::kTracked;
+        } else {
+            r.state = RegionState::kLost;
+            r.inliers = 0;
+            r.cur_pts.clear();
+            r.kf_pts.clear();
+        }
+        if (n >= out.size()) continue;
+        RegionEstimate& e = out[n++];
+        e.id = r.id;
+        e.state = r.state;
+        e.inliers = r.inliers;
+        e.keyframe_match = keyframe;
+        e.vertices = r.polygon.size();
+        for (std::size_t i = 0; i < e.vertices; ++i)
+            e.polygon[i] = {r.polygon[i].x, r.polygon[i].y};
+    }
+    // The next frame's window: kept while it holds every tracked region with room to
+    // move, else redrawn around them.
+    cv::Rect tight, next;
+    for (const Impl::Region& r : m.regions) {
+        if (r.state != RegionState::kTracked) continue;
+        tight |= expanded_box(r.polygon, 0, 16);
+        next |= expanded_box(r.polygon, 0.25, 48);
+    }
+    const cv::Rect frame_rect(0, 0, size.width, size.height);
+    tight &= frame_rect;
+    next &= frame_rect;
+    if (!m.p.propagate || next.empty()) {
+        m.prev_window = cv::Rect();
+    } else if (can_propagate && (tight & m.window_rect) == tight) {
+        std::swap(m.pyramid, m.prev_pyramid);  // the same window: this frame's pyramid serves
+    } else {
+        m.prev_window = next;
+        m.build_pyramid(frame, next, m.prev_pyramid);
+    }
+    m.current = nullptr;
+    return n;
+}
+
+}  // namespace endotower::vision
