@@ -11,11 +11,11 @@ size=${2:-640x480}
 mkdir -p "$out"
 printf '| Group | change | SIFT | ORB | AKAZE |\n|---|---|---|---|---|\n'
 for name in t65_emulated_1 t65_emulated_2 t65_emulated_3 t65_emulated_4 t65_emulated_5 t65_emulated_6 \
-    t66_occlusion t66_viewpoint; do
+    t66_deformation t66_occlusion t66_viewpoint; do
     scene=$out/${name}_$size
     [ -d "$scene" ] || "$bin" scene --scenario "$root/board/sim/scenarios/$name.yaml" --size "$size" --out "$scene" >/dev/null
     region=$(head -1 "$scene/truth.jsonl" | python3 -c 'import json,sys; print(" ".join("%.3f,%.3f" % tuple(p) for p in json.load(sys.stdin)["regions"][0]["polygon_px"]))')
-    change=$(sed -n 3p "$scene/truth.jsonl" | python3 -c 'import json,sys; print(json.load(sys.stdin)["regions"][0]["change"])')
+    change=$(tail -1 "$scene/truth.jsonl" | python3 -c 'import json,sys; print(json.load(sys.stdin)["regions"][0]["change"])')
     row="| $name | $change |"
     for d in sift orb akaze; do
         printf 'board: regions\nanalysis:\n  stage: none\n  tracker: none\n  regions: {descriptor: %s}\n' "$d" > "$out/board_$d.yaml"
