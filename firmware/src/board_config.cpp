@@ -126,7 +126,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return false;
     }
     if (const YAML::Node a = root["analysis"]) {
-        if (!r.keys(a, "analysis", {"stage", "tracker", "tool_model", "timeout_ms", "virtual_cost_ms", "max_overlay_age"}) ||
+        if (!r.keys(a, "analysis", {"stage", "tracker", "tool_model", "timeout_ms", "virtual_cost_ms", "max_overlay_age", "gestures"}) ||
             !r.text(a, "stage", "analysis.stage", c.stage) || !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
             !r.text(a, "tool_model", "analysis.tool_model", c.tool_model) ||
             !r.number(a, "timeout_ms", "analysis.timeout_ms", 0, 60000, c.analysis_timeout_ms) ||
@@ -142,6 +142,16 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (c.tracker == "likelihood" && c.tool_model.empty())
             return r.fail(a["tracker"], "analysis.tracker",
                           "the likelihood tracker needs analysis.tool_model (a file of 'endotower train-tool-model')");
+        if (const YAML::Node g = a["gestures"]) {
+            if (!g.IsMap()) return r.fail(g, "analysis.gestures", "expected a map {model: FILE, hold_ms: N}");
+            if (!r.keys(g, "analysis.gestures", {"model", "hold_ms"}) ||
+                !r.text(g, "model", "analysis.gestures.model", c.gesture_model) ||
+                !r.number(g, "hold_ms", "analysis.gestures.hold_ms", 0, 60000, c.gesture_hold_ms))
+                return false;
+            if (c.gesture_model.empty())
+                return r.fail(g, "analysis.gestures.model", "missing (a file of 'endotower train-gestures')");
+            c.gestures = true;
+        }
     }
     if (const YAML::Node s = root["sim"]) {
         if (!r.keys(s, "sim", {"input", "events", "output", "frames", "trace", "realtime", "fps"}) ||
@@ -153,7 +163,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return false;
     }
     const fs::path base = fs::path(path).parent_path();
-    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model})
+    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model, &c.gesture_model})
         *p = resolve(base, *p);
     out = std::move(c);
     return true;

@@ -25,6 +25,10 @@ struct BoardConfig {
     double analysis_timeout_ms = 0.0;
     double analysis_virtual_cost_ms = 0.0;
     int max_overlay_age = 0;
+    // analysis.gestures (issue 6): on when the map is present
+    bool gestures = false;
+    std::string gesture_model;     // a file of 'endotower train-gestures'
+    double gesture_hold_ms = 1000.0;  // held still this long before it fires
 
     // sim
     std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;

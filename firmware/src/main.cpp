@@ -26,6 +26,7 @@ constexpr Command kCommands[] = {
     {"eval", run_eval_command, "score a trace against ground truth, write a report"},
     {"scene", run_scene_command, "render a scenario: frames with exact ground truth"},
     {"train-tool-model", run_train_tool_model_command, "train the per-pixel tool likelihood of the likelihood tracker"},
+    {"train-gestures", run_train_gestures_command, "train the tool-gesture classifier from labelled recordings"},
 };
 
 void print_help() {

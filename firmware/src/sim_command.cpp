@@ -19,6 +19,7 @@
 #include "endotower/system/monotonic_clock.hpp"
 #include "endotower/system/syscall.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
@@ -198,9 +199,31 @@ int run_sim_command(const Args& args) {
     vision::LikelihoodToolTracker likelihood(tool_model);
     vision::ToolTracker& tracker = board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(likelihood) : kalman;
     vision::ToolTrackingStage tracking(tracker);
+    // Gestures (issue 6): a wrong or corrupt model disables them, never the video.
+    vision::GestureClassifier gesture_classifier;
+    vision::ToolLikelihood gesture_tool_model;
+    bool gestures = false;
+    if (board.gestures) {
+        gestures = gesture_classifier.load(board.gesture_model, error);
+        if (gestures && gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
+            !gesture_tool_model.load(board.tool_model, error)) {
+            error = "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
+            gestures = false;
+        }
+        if (!gestures)
+            std::fprintf(stderr, "endotower sim: analysis.gestures.model: %s; gesture recognition disabled\n",
+                         error.c_str());
+    }
+    vision::GestureSegmenterParams gesture_seg;
+    gesture_seg.method = gesture_classifier.segmentation();
+    vision::GestureSegmenter gesture_segmenter(&gesture_tool_model, gesture_seg);
+    vision::GestureStageParams gesture_params;
+    gesture_params.hold.hold_ms = board.gesture_hold_ms;
+    vision::GestureStage gesture_stage(gesture_segmenter, gesture_classifier, gesture_params);
     app::StageChain chain;
     if (board.stage == "status_badge") chain.add(&badge);
     if (board.tracker != "none") chain.add(&tracking);
+    if (gestures) chain.add(&gesture_stage);
     app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 
     app::PipelineConfig cfg;
