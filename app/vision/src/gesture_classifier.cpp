@@ -38,7 +38,8 @@ int gesture_label_index(const std::string& label) {
 struct GestureClassifier::Net {
     cv::Ptr<cv::ml::ANN_MLP> ann;
     // Per-call buffers, sized once (classify() allocates nothing).
-    mutable cv::Mat input{1, GestureFeatures::kExtendedCount, CV_32F}, output{1, kGestureLabelCount, CV_32F};
+    mutable cv::Mat input = cv::Mat(1, GestureFeatures::kExtendedCount, CV_32F),
+                    output = cv::Mat(1, kGestureLabelCount, CV_32F);
 };
 
 GestureClassifier::GestureClassifier() : net_(std::make_unique<Net>()) {}
