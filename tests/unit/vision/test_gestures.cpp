@@ -58,9 +58,13 @@ TEST(GestureFeatures, SquareIsNotElongatedAndDiscIsCompact) {
         for (int x = 0; x < 200; ++x)
             if ((x - 100) * (x - 100) + (y - 100) * (y - 100) <= 80 * 80) disc.px[y * 200 + x] = 255;
     const GestureFeatures d = disc.measure();
-    EXPECT_LT(d.compactness, 1.1);  // a digital circle's polygon is a little longer
+    // The boundary polygon of a digital circle runs in 45-degree steps: its perimeter
+    // is at most 8 (sqrt 2 - 1) / pi = 1.055 x the circle's, so compactness <= 1.113
+    // (plus the polygon's smaller area); the hull has the same steps.
     EXPECT_GE(d.compactness, 1.0);
-    EXPECT_NEAR(d.roughness, 1.0, 0.01);
+    EXPECT_LT(d.compactness, 1.14);
+    EXPECT_LT(d.compactness, s.compactness);
+    EXPECT_NEAR(d.roughness, 1.0, 0.06);
     EXPECT_NEAR(d.feret_elongation, 1.0, 0.02);
 }
 
@@ -214,11 +218,11 @@ TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             std::uint8_t* p = &img[(static_cast<std::size_t>(y) * W + x) * 3];
-            p[0] = 120, p[1] = 130, p[2] = 200;
+            p[0] = 200, p[1] = 210, p[2] = 240;
             const bool shaft = x >= 300 && y >= 230 && y < 250;
-            const bool jaw1 = x >= 240 && x < 300 && y >= 218 && y < 226;
-            const bool jaw2 = x >= 240 && x < 300 && y >= 254 && y < 262;
-            if (shaft || jaw1 || jaw2) p[0] = p[1] = p[2] = 30;
+            const bool jaw1 = x >= 240 && x < 306 && y >= 222 && y < 230;
+            const bool jaw2 = x >= 240 && x < 306 && y >= 250 && y < 258;
+            if (shaft || jaw1 || jaw2) p[0] = p[1] = p[2] = 85;  // dark steel, inside the lit field
         }
     hal::Frame f;
     f.format = {W, H, W * 3, hal::PixelFormat::kBgr24};
