@@ -11,7 +11,7 @@ namespace endotower::firmware {
 
 bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segmenter, int every,
                          std::vector<vision::GestureSample>& out, GestureDatasetStats& stats, std::string& error,
-                         double match_fraction) {
+                         double match_fraction, bool reject) {
     namespace fs = std::filesystem;
     const fs::path truth_path = fs::path(dir) / "truth.jsonl", frames = fs::path(dir) / "frames";
     if (!fs::is_directory(frames)) {
@@ -54,6 +54,13 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
                     if (tool.visible && !tool.gesture.empty() && d < best)
                         best = d, label = vision::gesture_label_index(tool.gesture);
                 }
+            }
+            if (label < 0 && reject) {
+                // Far from every tool: tissue the segmentation took for a tool.
+                bool far = true;
+                for (const eval::TruthTool& tool : t.tools)
+                    far = far && (!tool.visible || std::hypot(tool.tip_px.x - blobs[b].tip.x, tool.tip_px.y - blobs[b].tip.y) > 3 * near);
+                if (far) label = vision::kNotATool;
             }
             if (label < 0) {
                 ++stats.unlabelled;

@@ -7,7 +7,9 @@
 // the frame's two-tool `gesture` for a blob that enters the picture twice (or the only
 // blob), else the single-tool `gesture` of the visible tool whose tip_px is nearest
 // the blob's tip, within `match_fraction` (0.08) x frame width. Blobs without a label
-// are skipped (counted in `unlabelled`). Errors name the file.
+// are skipped (counted in `unlabelled`), except, with `reject`, those farther than
+// 3 x that distance from every visible tool's tip: vision::kNotATool (tissue taken
+// for a tool). Errors name the file.
 #pragma once
 
 #include <string>
@@ -23,6 +25,6 @@ struct GestureDatasetStats {
 
 bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segmenter, int every,
                          std::vector<vision::GestureSample>& out, GestureDatasetStats& stats, std::string& error,
-                         double match_fraction = 0.08);
+                         double match_fraction = 0.08, bool reject = false);
 
 }  // namespace endotower::firmware

@@ -23,7 +23,7 @@ void print_help() {
         "                     of 'endotower scene', or a hand-labelled clip in that layout)\n"
         "  --test DIR         held-out recording: prints the per-gesture accuracy on its tips\n"
         "  --features F       book: the six features, 6-20-7 (the book's baseline);\n"
-        "                     extended: nine (default)\n"
+        "                     extended: nine and a 'not a tool' class, 9-20-8 (default)\n"
         "  --segmentation S   likelihood (default) or morphology (eq. 3.3-3.5)\n"
         "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
         "  --every N          use every N-th frame (default 1)\n"
@@ -96,13 +96,15 @@ int run_train_gestures_command(const Args& args) {
     std::vector<vision::GestureSample> samples;
     GestureDatasetStats stats;
     for (const std::string& d : scenes)
-        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error)) return usage_error(error);
-    std::array<int, vision::kGestureLabelCount> per_class{};
+        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
+                                 params.features == vision::GestureFeatureSet::kExtended))
+            return usage_error(error);
+    std::array<int, vision::kGestureLabelCount + 1> per_class{};
     for (const auto& s : samples) ++per_class[s.label];
     std::printf("train-gestures: %d frames, %d tip regions, %d unlabelled, %zu samples:", stats.frames, stats.blobs,
                 stats.unlabelled, samples.size());
     for (int c = 0; c < vision::kGestureLabelCount; ++c) std::printf(" %s %d", vision::kGestureLabels[c], per_class[c]);
-    std::printf("\n");
+    std::printf(" not_a_tool %d\n", per_class[vision::kNotATool]);
     vision::GestureClassifier classifier;
     if (!classifier.train(samples, params, error)) {
         std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());
@@ -111,16 +113,17 @@ int run_train_gestures_command(const Args& args) {
     for (const std::string& d : tests) {
         std::vector<vision::GestureSample> held_out;
         GestureDatasetStats ts;
-        if (!add_gesture_samples(d, segmenter, 1, held_out, ts, error)) return usage_error(error);
-        std::array<int, vision::kGestureLabelCount> total{}, right{};
+        if (!add_gesture_samples(d, segmenter, 1, held_out, ts, error, 0.08, true)) return usage_error(error);
+        std::array<int, vision::kGestureLabelCount + 1> total{}, right{};
         for (const auto& s : held_out) {
             ++total[s.label];
-            if (classifier.classify(s.features).label == s.label) ++right[s.label];
+            const int got = classifier.classify(s.features).label;
+            if (got == s.label || (got < 0 && s.label == vision::kNotATool)) ++right[s.label];
         }
         std::printf("test %s:", d.c_str());
         for (int c = 0; c < vision::kGestureLabelCount; ++c)
             if (total[c] > 0) std::printf(" %s %d/%d", vision::kGestureLabels[c], right[c], total[c]);
-        std::printf("\n");
+        std::printf(" | tissue rejected %d/%d\n", right[vision::kNotATool], total[vision::kNotATool]);
     }
     if (!system::write_file_atomic(out, classifier.serialise(), error)) {
         std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());

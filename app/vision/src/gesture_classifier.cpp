@@ -39,7 +39,7 @@ struct GestureClassifier::Net {
     cv::Ptr<cv::ml::ANN_MLP> ann;
     // Per-call buffers, sized once (classify() allocates nothing).
     mutable cv::Mat input = cv::Mat(1, GestureFeatures::kExtendedCount, CV_32F),
-                    output = cv::Mat(1, kGestureLabelCount, CV_32F);
+                    output = cv::Mat(1, kGestureLabelCount + 1, CV_32F);
 };
 
 GestureClassifier::GestureClassifier() : net_(std::make_unique<Net>()) {}
@@ -49,10 +49,12 @@ bool GestureClassifier::trained() const { return !net_->ann.empty() && net_->ann
 
 bool GestureClassifier::train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
                               std::string& error) {
-    const int nf = params.features == GestureFeatureSet::kBook ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
-    std::array<std::vector<const GestureSample*>, kGestureLabelCount> by_class;
+    const bool book = params.features == GestureFeatureSet::kBook;
+    const int nf = book ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
+    const int classes = book ? kGestureLabelCount : kGestureLabelCount + 1;
+    std::array<std::vector<const GestureSample*>, kGestureLabelCount + 1> by_class;
     for (const GestureSample& s : samples)
-        if (s.features.valid && s.label >= 0 && s.label < kGestureLabelCount) by_class[s.label].push_back(&s);
+        if (s.features.valid && s.label >= 0 && s.label < classes) by_class[s.label].push_back(&s);
     std::size_t most = 0;
     for (const auto& c : by_class) most = std::max(most, c.size());
     if (most == 0) {
@@ -60,21 +62,21 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples, const G
         return false;
     }
     // Equal weight per class: the rarer classes' samples are repeated in turn.
-    cv::Mat x(0, nf, CV_32F), y(0, kGestureLabelCount, CV_32F);
+    cv::Mat x(0, nf, CV_32F), y(0, classes, CV_32F);
     for (const auto& c : by_class)
         for (std::size_t i = 0; !c.empty() && i < most; ++i) {
             const auto v = c[i % c.size()]->features.as_vector();
             cv::Mat row(1, nf, CV_32F);
             for (int k = 0; k < nf; ++k) row.at<float>(0, k) = v[k];
             x.push_back(row);
-            cv::Mat t(1, kGestureLabelCount, CV_32F, cv::Scalar(0.1f));
+            cv::Mat t(1, classes, CV_32F, cv::Scalar(0.1f));
             t.at<float>(0, c[i % c.size()]->label) = 0.9f;
             y.push_back(t);
         }
     try {
         cv::theRNG().state = 0x12345678;  // ANN_MLP draws its initial weights from it
         cv::Ptr<cv::ml::ANN_MLP> ann = cv::ml::ANN_MLP::create();
-        ann->setLayerSizes(cv::Mat_<int>({1, 3}, {nf, params.hidden, kGestureLabelCount}));
+        ann->setLayerSizes(cv::Mat_<int>({1, 3}, {nf, params.hidden, classes}));
         ann->setActivationFunction(cv::ml::ANN_MLP::SIGMOID_SYM, 0, 0);
         ann->setTrainMethod(cv::ml::ANN_MLP::BACKPROP, 0.05, 0.1);
         ann->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS, params.iterations, 1e-7));
@@ -105,8 +107,10 @@ GestureResult GestureClassifier::classify(const GestureFeatures& f) const {
         return r;
     }
     const float* o = net_->output.ptr<float>(0);
-    r.label = static_cast<int>(std::max_element(o, o + kGestureLabelCount) - o);
-    r.confidence = std::clamp<double>(o[r.label], 0.0, 1.0);
+    const int classes = net_->output.cols;
+    const int best = static_cast<int>(std::max_element(o, o + classes) - o);
+    r.confidence = std::clamp<double>(o[best], 0.0, 1.0);
+    r.label = best < kGestureLabelCount ? best : -1;  // "not a tool": no gesture
     return r;
 }
 
@@ -152,6 +156,7 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
     const GestureFeatureSet fs_set = features == "book" ? GestureFeatureSet::kBook : GestureFeatureSet::kExtended;
     const int nf = fs_set == GestureFeatureSet::kBook ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
+    const int classes = fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
     const std::size_t net_at = bytes.find('\n', bytes.find('\n', magic.size()) + 1) + 1;
     cv::Ptr<cv::ml::ANN_MLP> ann;
     try {
@@ -165,8 +170,9 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     }
     const cv::Mat sizes = ann->getLayerSizes();
     if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf || sizes.at<int>(1) < 1 ||
-        sizes.at<int>(2) != kGestureLabelCount || !ann->isTrained())
-        return fail("the network is not " + std::to_string(nf) + "-N-7 for the '" + features + "' features");
+        sizes.at<int>(2) != classes || !ann->isTrained())
+        return fail("the network is not " + std::to_string(nf) + "-N-" + std::to_string(classes) + " for the '" +
+                    features + "' features");
     net_->ann = ann;
     features_ = fs_set;
     segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology : GestureSegmentation::kLikelihood;

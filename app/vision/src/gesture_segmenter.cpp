@@ -125,6 +125,16 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<Gesture
             }
         }
         if (w.entries.empty()) continue;  // not entering from outside: not a tool
+        {  // A tool is a shaft: long for its width (second moments of the region).
+            double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+            for (const auto& p : w.pixels) mx += p.x, my += p.y;
+            mx /= w.pixels.size(), my /= w.pixels.size();
+            for (const auto& p : w.pixels)
+                sxx += (p.x - mx) * (p.x - mx), syy += (p.y - my) * (p.y - my), sxy += (p.x - mx) * (p.y - my);
+            const double tr = sxx + syy, det = sxx * syy - sxy * sxy, disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
+            const double l1 = tr / 2 + disc, l2 = std::max(1e-9, tr / 2 - disc);
+            if (l1 < params_.min_elongation * params_.min_elongation * l2) continue;
+        }
         // One or two entries: the entry pixels' two extremes, split if far apart.
         auto d2 = [](const Work::Px& a, const Work::Px& b) { return double(a.x - b.x) * (a.x - b.x) + double(a.y - b.y) * (a.y - b.y); };
         Work::Px pa = w.entries[0], pb = pa;

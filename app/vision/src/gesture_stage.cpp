@@ -34,15 +34,18 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         results[i] = classifier_.classify(blobs_[i].features);
         if (results[i].confidence < params_.min_confidence) results[i].label = -1;
     }
-    // One region: its gesture is the frame's; two regions: two single-tool calls.
-    const bool one = n == 1 && results[0].label >= 0;
-    const GestureHold::State s =
-        hold_.update(one ? results[0].label : -1, n > 0 ? blobs_[0].tip : Point2{}, ctx.frame.capture_ns, still_px_);
+    // One region with a gesture: it is the frame's; two: two single-tool calls.
+    std::size_t gestures = 0, which = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (results[i].label >= 0) ++gestures, which = i;
+    const bool one = gestures == 1;
+    const GestureHold::State s = hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},
+                                              ctx.frame.capture_ns, still_px_);
 
     ctx.trace.begin_object("gesture");
     if (s.label >= 0) ctx.trace.field("label", kGestureLabels[s.label]);
     else ctx.trace.null_field("label");
-    ctx.trace.field("confidence", one ? results[0].confidence : 0.0)
+    ctx.trace.field("confidence", one ? results[which].confidence : 0.0)
         .field("held_ms", s.held_ms)
         .field("fired", s.fired)
         .begin_array("tools");

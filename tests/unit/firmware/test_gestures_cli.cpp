@@ -38,7 +38,9 @@ protected:
     }
     // Renders a suite once per test run (at its own seed unless `seed` is given).
     static fs::path scene(const std::string& scenario, const std::string& extra = "") {
-        const std::string name = fs::path(scenario).stem().string() + (extra.empty() ? "" : "_x");
+        std::string name = fs::path(scenario).stem().string() + extra;
+        for (char& ch : name)
+            if (ch == ' ' || ch == '-') ch = '_';
         const fs::path out = dir() / name;
         if (!fs::exists(out / "truth.jsonl")) {
             fs::create_directories(dir());

@@ -14,7 +14,8 @@
 //     both then only inside the lit field of view (as LikelihoodToolTracker);
 //  2. 8-connected regions of at least `min_area_fraction` (0.002) of the picture that
 //     reach within `border_touch_fraction` (0.06) x width of its edge (tools enter
-//     from outside the picture), the largest `kMaxBlobs` (2);
+//     from outside the picture) and whose length (principal axis, second moments) is
+//     at least `min_elongation` (2.5) x their width; the largest `kMaxBlobs` (2);
 //  3. per region, the tip: the pixel farthest from where it enters (from both entries
 //     when two tools cross and meet the rim twice); the shaft radius r: the largest
 //     distance-transform value near the entry; the tip window: the region's pixels
@@ -47,6 +48,7 @@ struct GestureSegmenterParams {
     int threshold = 128;
     double min_area_fraction = 0.002;
     double border_touch_fraction = 0.06;
+    double min_elongation = 2.5;
     double window_radii = 8.0;
 };
 

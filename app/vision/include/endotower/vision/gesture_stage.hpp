@@ -1,9 +1,9 @@
 // GestureStage: tool-gesture recognition on the analysis path (book ch. 3).
 //
 // Per frame: GestureSegmenter finds up to two tool tips; each is classified
-// (GestureClassifier). One region = one gesture (a single tool, or two crossing tools:
-// cross / triangle / double triangle); two separate regions are two single-tool calls
-// (fig. 3.21) and the frame's label is null (each tool's own is listed).
+// (GestureClassifier). One region with a gesture = the frame's gesture (a single tool,
+// or two crossing tools: cross / triangle / double triangle); two are two single-tool
+// calls (fig. 3.21) and the frame's label is null (each tool's own is listed).
 // A label below `min_confidence` (0.5) counts as none.
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
