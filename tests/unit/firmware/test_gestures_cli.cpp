@@ -151,6 +151,6 @@ TEST_F(Gestures, EvalConfusionOnARenderedSuite) {
                        " --min-gesture-rate 0.95");
     const std::string out = slurp(dir() / "out.txt");
     EXPECT_EQ(rc, 0) << out << slurp(dir() / "out.err");
-    EXPECT_NE(out.find("open grasper"), std::string::npos) << out;
-    EXPECT_NE(out.find("closed grasper"), std::string::npos) << out;
+    // Seven orientations x (open, closed) = 14 trials; the rate threshold is the goal.
+    EXPECT_NE(out.find("gestures: 14 trials"), std::string::npos) << out;
 }
