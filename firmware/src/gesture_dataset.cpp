@@ -10,8 +10,8 @@
 namespace endotower::firmware {
 
 bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segmenter, int every,
-                         std::vector<vision::GestureSample>& out, GestureDatasetStats& stats, std::string& error,
-                         double match_fraction, bool reject) {
+                         std::vector<vision::GestureSample>& out, GestureDatasetStats& stats,
+                         std::string& error, double match_fraction, bool reject) {
     namespace fs = std::filesystem;
     const fs::path truth_path = fs::path(dir) / "truth.jsonl", frames = fs::path(dir) / "frames";
     if (!fs::is_directory(frames)) {
@@ -29,7 +29,8 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
         const std::string path = (frames / name).string();
         cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
         if (img.empty()) {
-            error = path + ": missing or not an image (truth line for frame " + std::to_string(t.frame) + ")";
+            error = path + ": missing or not an image (truth line for frame " +
+                    std::to_string(t.frame) + ")";
             return false;
         }
         hal::Frame f;
@@ -50,7 +51,8 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
             } else if (!t.gesture) {
                 double best = near;
                 for (const eval::TruthTool& tool : t.tools) {
-                    const double d = std::hypot(tool.tip_px.x - blobs[b].tip.x, tool.tip_px.y - blobs[b].tip.y);
+                    const double d =
+                        std::hypot(tool.tip_px.x - blobs[b].tip.x, tool.tip_px.y - blobs[b].tip.y);
                     if (tool.visible && !tool.gesture.empty() && d < best)
                         best = d, label = vision::gesture_label_index(tool.gesture);
                 }
@@ -59,7 +61,9 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
                 // Far from every tool: tissue the segmentation took for a tool.
                 bool far = true;
                 for (const eval::TruthTool& tool : t.tools)
-                    far = far && (!tool.visible || std::hypot(tool.tip_px.x - blobs[b].tip.x, tool.tip_px.y - blobs[b].tip.y) > 3 * near);
+                    far = far &&
+                          (!tool.visible || std::hypot(tool.tip_px.x - blobs[b].tip.x,
+                                                       tool.tip_px.y - blobs[b].tip.y) > 3 * near);
                 if (far) label = vision::kNotATool;
             }
             if (label < 0) {

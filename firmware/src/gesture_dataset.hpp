@@ -24,7 +24,7 @@ struct GestureDatasetStats {
 };
 
 bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segmenter, int every,
-                         std::vector<vision::GestureSample>& out, GestureDatasetStats& stats, std::string& error,
-                         double match_fraction = 0.08, bool reject = false);
+                         std::vector<vision::GestureSample>& out, GestureDatasetStats& stats,
+                         std::string& error, double match_fraction = 0.08, bool reject = false);
 
 }  // namespace endotower::firmware

@@ -23,7 +23,8 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
     scene::Scenario scenario;
     if (!tool_model.load(root + "/board/sim/models/tool_likelihood.bin", error) ||
         !classifier.load(root + "/board/sim/models/gestures.yml", error) ||
-        !scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml", scenario, error)) {
+        !scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml", scenario,
+                              error)) {
         state.SkipWithError(error.c_str());
         return;
     }
@@ -54,8 +55,11 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
         f.data = frames[i++ % frames.size()].bgr.data();
         const auto t0 = std::chrono::steady_clock::now();
         const std::size_t n = segmenter.segment(f, blobs);
-        for (std::size_t b = 0; b < n; ++b) found += classifier.classify(blobs[b].features).label >= 0;
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        for (std::size_t b = 0; b < n; ++b)
+            found += classifier.classify(blobs[b].features).label >= 0;
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
     }
     std::sort(ms.begin(), ms.end());
     state.counters["median_ms"] = ms[ms.size() / 2];

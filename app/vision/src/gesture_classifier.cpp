@@ -4,10 +4,9 @@
 #include <cinttypes>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
-
 #include <opencv2/core.hpp>
 #include <opencv2/ml.hpp>
+#include <sstream>
 
 namespace endotower::vision {
 
@@ -18,11 +17,14 @@ constexpr const char* kNode = "opencv_ml_ann_mlp";
 
 std::uint64_t fnv1a(const char* p, std::size_t n) {
     std::uint64_t h = 1469598103934665603ull;
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<std::uint8_t>(p[i])) * 1099511628211ull;
+    for (std::size_t i = 0; i < n; ++i)
+        h = (h ^ static_cast<std::uint8_t>(p[i])) * 1099511628211ull;
     return h;
 }
 
-const char* feature_name(GestureFeatureSet s) { return s == GestureFeatureSet::kBook ? "book" : "extended"; }
+const char* feature_name(GestureFeatureSet s) {
+    return s == GestureFeatureSet::kBook ? "book" : "extended";
+}
 const char* segmentation_name(GestureSegmentation s) {
     return s == GestureSegmentation::kMorphology ? "morphology" : "likelihood";
 }
@@ -45,10 +47,12 @@ struct GestureClassifier::Net {
 GestureClassifier::GestureClassifier() : net_(std::make_unique<Net>()) {}
 GestureClassifier::~GestureClassifier() = default;
 
-bool GestureClassifier::trained() const { return !net_->ann.empty() && net_->ann->isTrained(); }
+bool GestureClassifier::trained() const {
+    return !net_->ann.empty() && net_->ann->isTrained();
+}
 
-bool GestureClassifier::train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
-                              std::string& error) {
+bool GestureClassifier::train(const std::vector<GestureSample>& samples,
+                              const GestureTrainParams& params, std::string& error) {
     const bool book = params.features == GestureFeatureSet::kBook;
     const int nf = book ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
     const int classes = book ? kGestureLabelCount : kGestureLabelCount + 1;
@@ -79,7 +83,8 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples, const G
         ann->setLayerSizes(cv::Mat_<int>({1, 3}, {nf, params.hidden, classes}));
         ann->setActivationFunction(cv::ml::ANN_MLP::SIGMOID_SYM, 0, 0);
         ann->setTrainMethod(cv::ml::ANN_MLP::BACKPROP, 0.05, 0.1);
-        ann->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS, params.iterations, 1e-7));
+        ann->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS,
+                                              params.iterations, 1e-7));
         if (!ann->train(cv::ml::TrainData::create(x, cv::ml::ROW_SAMPLE, y))) {
             error = "backpropagation did not converge";
             return false;
@@ -119,7 +124,8 @@ std::string GestureClassifier::serialise() const {
     body += std::string("features ") + feature_name(features_) + "\n";
     body += std::string("segmentation ") + segmentation_name(segmentation_) + "\n";
     if (trained()) {
-        cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+        cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
+                                       cv::FileStorage::FORMAT_YAML);
         fs << kNode << "{";
         net_->ann->write(fs);
         fs << "}";
@@ -131,21 +137,25 @@ std::string GestureClassifier::serialise() const {
     return body + tail;
 }
 
-bool GestureClassifier::parse(const std::string& bytes, const std::string& name, std::string& error) {
+bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
+                              std::string& error) {
     auto fail = [&](const std::string& what) {
         error = name + ": " + what;
         return false;
     };
     const std::string magic = kMagic;
-    if (bytes.compare(0, magic.size(), magic) != 0) return fail("not a gesture model (expected the header ETGES1)");
+    if (bytes.compare(0, magic.size(), magic) != 0)
+        return fail("not a gesture model (expected the header ETGES1)");
     constexpr std::size_t kTail = 6 + 16 + 1;
-    if (bytes.size() < magic.size() + kTail) return fail("truncated (no 'fnv1a' checksum line at the end)");
+    if (bytes.size() < magic.size() + kTail)
+        return fail("truncated (no 'fnv1a' checksum line at the end)");
     const std::size_t body_size = bytes.size() - kTail;
     if (bytes.compare(body_size, 6, "fnv1a ") != 0 || bytes.back() != '\n')
         return fail("truncated (no 'fnv1a' checksum line at the end)");
     char want[17];
     std::snprintf(want, sizeof want, "%016" PRIx64, fnv1a(bytes.data(), body_size));
-    if (bytes.compare(body_size + 6, 16, want) != 0) return fail("checksum mismatch (corrupt or edited model file)");
+    if (bytes.compare(body_size + 6, 16, want) != 0)
+        return fail("checksum mismatch (corrupt or edited model file)");
     std::istringstream in(bytes.substr(magic.size(), body_size - magic.size()));
     std::string key, features, segmentation;
     in >> key >> features;
@@ -154,14 +164,18 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     in >> key >> segmentation;
     if (key != "segmentation" || (segmentation != "morphology" && segmentation != "likelihood"))
         return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
-    const GestureFeatureSet fs_set = features == "book" ? GestureFeatureSet::kBook : GestureFeatureSet::kExtended;
-    const int nf = fs_set == GestureFeatureSet::kBook ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
-    const int classes = fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
+    const GestureFeatureSet fs_set =
+        features == "book" ? GestureFeatureSet::kBook : GestureFeatureSet::kExtended;
+    const int nf = fs_set == GestureFeatureSet::kBook ? GestureFeatures::kBookCount
+                                                      : GestureFeatures::kExtendedCount;
+    const int classes =
+        fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
     const std::size_t net_at = bytes.find('\n', bytes.find('\n', magic.size()) + 1) + 1;
     cv::Ptr<cv::ml::ANN_MLP> ann;
     try {
-        cv::FileStorage fs(bytes.substr(net_at, body_size - net_at),
-                           cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+        cv::FileStorage fs(
+            bytes.substr(net_at, body_size - net_at),
+            cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
         if (!fs.isOpened() || fs[kNode].empty()) return fail("no network in the file");
         ann = cv::ml::ANN_MLP::create();
         ann->read(fs[kNode]);
@@ -169,13 +183,14 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         return fail("unreadable network (" + e.msg + ")");
     }
     const cv::Mat sizes = ann->getLayerSizes();
-    if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf || sizes.at<int>(1) < 1 ||
-        sizes.at<int>(2) != classes || !ann->isTrained())
-        return fail("the network is not " + std::to_string(nf) + "-N-" + std::to_string(classes) + " for the '" +
-                    features + "' features");
+    if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf ||
+        sizes.at<int>(1) < 1 || sizes.at<int>(2) != classes || !ann->isTrained())
+        return fail("the network is not " + std::to_string(nf) + "-N-" + std::to_string(classes) +
+                    " for the '" + features + "' features");
     net_->ann = ann;
     features_ = fs_set;
-    segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology : GestureSegmentation::kLikelihood;
+    segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology
+                                                 : GestureSegmentation::kLikelihood;
     return true;
 }
 

@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
-
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 namespace endotower::vision {
 
@@ -32,10 +31,12 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     const int sw = std::max(1, static_cast<int>(std::lround(format.width * w.scale)));
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
-    for (cv::Mat* m : {&w.gray, &w.blurred, &w.lit, &w.a, &w.opened, &w.binary, &w.window}) m->create(sh, sw, CV_8U);
+    for (cv::Mat* m : {&w.gray, &w.blurred, &w.lit, &w.a, &w.opened, &w.binary, &w.window})
+        m->create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
     w.dist.create(sh, sw, CV_32F);
-    const int big = std::max(3, static_cast<int>(std::lround(params_.large_element_fraction * sw)) | 1);
+    const int big =
+        std::max(3, static_cast<int>(std::lround(params_.large_element_fraction * sw)) | 1);
     w.large_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(big, big));
     const int s = std::max(1, params_.small_element);
     w.small_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(s, s));
@@ -46,13 +47,19 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     w.regions.reserve(256);
 }
 
-std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<GestureBlob, kMaxBlobs> out) {
+std::size_t GestureSegmenter::segment(const hal::Frame& frame,
+                                      std::span<GestureBlob, kMaxBlobs> out) {
     Work& w = *work_;
     if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty()) return 0;
-    if (params_.method == GestureSegmentation::kLikelihood && (model_ == nullptr || !model_->trained())) return 0;
-    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
-    if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
-    else full.copyTo(w.small);
+    if (params_.method == GestureSegmentation::kLikelihood &&
+        (model_ == nullptr || !model_->trained()))
+        return 0;
+    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
+                       frame.format.stride);
+    if (w.scale < 1.0)
+        cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
+    else
+        full.copyTo(w.small);
     const int W = w.small.cols, H = w.small.rows;
 
     // Luma (and the tool probability) per pixel; brightness histogram for the field of view.
@@ -94,12 +101,16 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<Gesture
         cv::add(w.a, w.opened, w.a);
         cv::threshold(w.a, w.binary, params_.high_threshold - 1, 255, cv::THRESH_BINARY);
     }
-    const int n = cv::connectedComponentsWithStats(w.binary, w.labels, w.stats, w.centroids, 8, CV_32S);
-    const double min_area = params_.min_area_fraction * W * H, touch = params_.border_touch_fraction * W;
+    const int n =
+        cv::connectedComponentsWithStats(w.binary, w.labels, w.stats, w.centroids, 8, CV_32S);
+    const double min_area = params_.min_area_fraction * W * H,
+                 touch = params_.border_touch_fraction * W;
     w.regions.clear();
     for (int i = 1; i < n; ++i)
-        if (w.stats.at<int>(i, cv::CC_STAT_AREA) >= min_area) w.regions.push_back({i, w.stats.at<int>(i, cv::CC_STAT_AREA)});
-    std::sort(w.regions.begin(), w.regions.end(), [](const Work::Region& a, const Work::Region& b) { return a.area > b.area; });
+        if (w.stats.at<int>(i, cv::CC_STAT_AREA) >= min_area)
+            w.regions.push_back({i, w.stats.at<int>(i, cv::CC_STAT_AREA)});
+    std::sort(w.regions.begin(), w.regions.end(),
+              [](const Work::Region& a, const Work::Region& b) { return a.area > b.area; });
     if (w.regions.empty()) return 0;
     cv::distanceTransform(w.binary, w.dist, cv::DIST_L2, 3);
     auto rim_distance = [&](int x, int y) {
@@ -110,8 +121,10 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<Gesture
     std::size_t found = 0;
     for (const Work::Region& reg : w.regions) {
         if (found == out.size()) break;
-        const int bx = w.stats.at<int>(reg.label, cv::CC_STAT_LEFT), by = w.stats.at<int>(reg.label, cv::CC_STAT_TOP);
-        const int bw = w.stats.at<int>(reg.label, cv::CC_STAT_WIDTH), bh = w.stats.at<int>(reg.label, cv::CC_STAT_HEIGHT);
+        const int bx = w.stats.at<int>(reg.label, cv::CC_STAT_LEFT),
+                  by = w.stats.at<int>(reg.label, cv::CC_STAT_TOP);
+        const int bw = w.stats.at<int>(reg.label, cv::CC_STAT_WIDTH),
+                  bh = w.stats.at<int>(reg.label, cv::CC_STAT_HEIGHT);
         w.pixels.clear();
         w.entries.clear();
         float radius = 0;
@@ -121,7 +134,8 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<Gesture
             for (int x = bx; x < bx + bw; ++x) {
                 if (l[x] != reg.label) continue;
                 w.pixels.push_back({x, y});
-                if (rim_distance(x, y) < touch) w.entries.push_back({x, y}), radius = std::max(radius, d[x]);
+                if (rim_distance(x, y) < touch)
+                    w.entries.push_back({x, y}), radius = std::max(radius, d[x]);
             }
         }
         if (w.entries.empty()) continue;  // not entering from outside: not a tool
@@ -130,22 +144,30 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<Gesture
             for (const auto& p : w.pixels) mx += p.x, my += p.y;
             mx /= w.pixels.size(), my /= w.pixels.size();
             for (const auto& p : w.pixels)
-                sxx += (p.x - mx) * (p.x - mx), syy += (p.y - my) * (p.y - my), sxy += (p.x - mx) * (p.y - my);
-            const double tr = sxx + syy, det = sxx * syy - sxy * sxy, disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
+                sxx += (p.x - mx) * (p.x - mx), syy += (p.y - my) * (p.y - my),
+                    sxy += (p.x - mx) * (p.y - my);
+            const double tr = sxx + syy, det = sxx * syy - sxy * sxy,
+                         disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
             const double l1 = tr / 2 + disc, l2 = std::max(1e-9, tr / 2 - disc);
             if (l1 < params_.min_elongation * params_.min_elongation * l2) continue;
         }
         // One or two entries: the entry pixels' two extremes, split if far apart.
-        auto d2 = [](const Work::Px& a, const Work::Px& b) { return double(a.x - b.x) * (a.x - b.x) + double(a.y - b.y) * (a.y - b.y); };
+        auto d2 = [](const Work::Px& a, const Work::Px& b) {
+            return double(a.x - b.x) * (a.x - b.x) + double(a.y - b.y) * (a.y - b.y);
+        };
         Work::Px pa = w.entries[0], pb = pa;
-        for (const auto& e : w.entries) if (d2(e, w.entries[0]) > d2(pa, w.entries[0])) pa = e;
-        for (const auto& e : w.entries) if (d2(e, pa) > d2(pb, pa)) pb = e;
+        for (const auto& e : w.entries)
+            if (d2(e, w.entries[0]) > d2(pa, w.entries[0])) pa = e;
+        for (const auto& e : w.entries)
+            if (d2(e, pa) > d2(pb, pa)) pb = e;
         const bool two = std::sqrt(d2(pa, pb)) > 6.0 * std::max(2.0f, radius);
         double ax = 0, ay = 0, bx2 = 0, by2 = 0;
         int na = 0, nb = 0;
         for (const auto& e : w.entries) {
-            if (two && d2(e, pb) < d2(e, pa)) bx2 += e.x, by2 += e.y, ++nb;
-            else ax += e.x, ay += e.y, ++na;
+            if (two && d2(e, pb) < d2(e, pa))
+                bx2 += e.x, by2 += e.y, ++nb;
+            else
+                ax += e.x, ay += e.y, ++na;
         }
         ax /= na, ay /= na;
         if (nb > 0) bx2 /= nb, by2 /= nb;
@@ -163,15 +185,19 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame, std::span<Gesture
         tx /= nt, ty /= nt;
         if (radius < 1.0f) radius = 1.0f;
         const double R = params_.window_radii * radius;
-        const int x0 = std::max(0, static_cast<int>(tx - R) - 1), y0 = std::max(0, static_cast<int>(ty - R) - 1);
-        const int x1 = std::min(W, static_cast<int>(tx + R) + 2), y1 = std::min(H, static_cast<int>(ty + R) + 2);
+        const int x0 = std::max(0, static_cast<int>(tx - R) - 1),
+                  y0 = std::max(0, static_cast<int>(ty - R) - 1);
+        const int x1 = std::min(W, static_cast<int>(tx + R) + 2),
+                  y1 = std::min(H, static_cast<int>(ty + R) + 2);
         cv::Mat win = w.window(cv::Rect(x0, y0, x1 - x0, y1 - y0));
         win.setTo(0);
         for (const auto& p : w.pixels)
-            if (p.x >= x0 && p.x < x1 && p.y >= y0 && p.y < y1 && std::hypot(p.x - tx, p.y - ty) <= R)
+            if (p.x >= x0 && p.x < x1 && p.y >= y0 && p.y < y1 &&
+                std::hypot(p.x - tx, p.y - ty) <= R)
                 win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
         GestureBlob& b = out[found];
-        b.features = measure_gesture_features(win.data, win.cols, win.rows, static_cast<int>(win.step));
+        b.features =
+            measure_gesture_features(win.data, win.cols, win.rows, static_cast<int>(win.step));
         if (!b.features.valid) continue;
         b.tip = {tx / w.scale, ty / w.scale};
         b.radius_px = radius / w.scale;

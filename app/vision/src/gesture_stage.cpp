@@ -6,7 +6,8 @@
 namespace endotower::vision {
 
 GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns, double still_px) {
-    const bool same = label >= 0 && label == label_ && std::hypot(where.x - anchor_.x, where.y - anchor_.y) <= still_px;
+    const bool same = label >= 0 && label == label_ &&
+                      std::hypot(where.x - anchor_.x, where.y - anchor_.y) <= still_px;
     if (!same) {
         label_ = label;
         anchor_ = where;
@@ -28,7 +29,8 @@ void GestureStage::configure(const hal::FrameFormat& format) {
 }
 
 void GestureStage::process(app::AnalysisContext& ctx) {
-    const std::size_t n = segmenter_.segment(ctx.frame, std::span<GestureBlob, GestureSegmenter::kMaxBlobs>(blobs_));
+    const std::size_t n =
+        segmenter_.segment(ctx.frame, std::span<GestureBlob, GestureSegmenter::kMaxBlobs>(blobs_));
     std::array<GestureResult, GestureSegmenter::kMaxBlobs> results{};
     for (std::size_t i = 0; i < n; ++i) {
         results[i] = classifier_.classify(blobs_[i].features);
@@ -39,22 +41,30 @@ void GestureStage::process(app::AnalysisContext& ctx) {
     for (std::size_t i = 0; i < n; ++i)
         if (results[i].label >= 0) ++gestures, which = i;
     const bool one = gestures == 1;
-    const GestureHold::State s = hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},
-                                              ctx.frame.capture_ns, still_px_);
+    const GestureHold::State s =
+        hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},
+                     ctx.frame.capture_ns, still_px_);
 
     ctx.trace.begin_object("gesture");
-    if (s.label >= 0) ctx.trace.field("label", kGestureLabels[s.label]);
-    else ctx.trace.null_field("label");
+    if (s.label >= 0)
+        ctx.trace.field("label", kGestureLabels[s.label]);
+    else
+        ctx.trace.null_field("label");
     ctx.trace.field("confidence", one ? results[which].confidence : 0.0)
         .field("held_ms", s.held_ms)
         .field("fired", s.fired)
         .begin_array("tools");
     for (std::size_t i = 0; i < n; ++i) {
         ctx.trace.begin_object();
-        if (results[i].label >= 0) ctx.trace.field("label", kGestureLabels[results[i].label]);
-        else ctx.trace.null_field("label");
+        if (results[i].label >= 0)
+            ctx.trace.field("label", kGestureLabels[results[i].label]);
+        else
+            ctx.trace.null_field("label");
         ctx.trace.field("confidence", results[i].confidence)
-            .begin_array("tip_px").value(blobs_[i].tip.x).value(blobs_[i].tip.y).end_array()
+            .begin_array("tip_px")
+            .value(blobs_[i].tip.x)
+            .value(blobs_[i].tip.y)
+            .end_array()
             .end_object();
     }
     ctx.trace.end_array().end_object();

@@ -56,7 +56,8 @@ TEST(GestureFeatures, SquareIsNotElongatedAndDiscIsCompact) {
     Mask disc(200, 200);
     for (int y = 0; y < 200; ++y)
         for (int x = 0; x < 200; ++x)
-            if ((x - 100) * (x - 100) + (y - 100) * (y - 100) <= 80 * 80) disc.px[y * 200 + x] = 255;
+            if ((x - 100) * (x - 100) + (y - 100) * (y - 100) <= 80 * 80)
+                disc.px[y * 200 + x] = 255;
     const GestureFeatures d = disc.measure();
     // The boundary polygon of a digital circle runs in 45-degree steps: its perimeter
     // is at most 8 (sqrt 2 - 1) / pi = 1.055 x the circle's, so compactness <= 1.113
@@ -109,7 +110,7 @@ TEST(GestureHold, MovingOrChangingRestartsAndNoneNeverFires) {
     const hal::Nanos ms = 1'000'000;
     EXPECT_DOUBLE_EQ(hold.update(1, {0, 0}, 0, 5.0).held_ms, 0.0);
     EXPECT_DOUBLE_EQ(hold.update(1, {4, 3}, 150 * ms, 5.0).held_ms, 150.0);  // 5 px: still
-    EXPECT_DOUBLE_EQ(hold.update(1, {6, 0}, 190 * ms, 5.0).held_ms, 0.0);   // moved: new hold
+    EXPECT_DOUBLE_EQ(hold.update(1, {6, 0}, 190 * ms, 5.0).held_ms, 0.0);    // moved: new hold
     EXPECT_FALSE(hold.update(1, {6, 0}, 380 * ms, 5.0).fired);
     EXPECT_TRUE(hold.update(1, {6, 0}, 390 * ms, 5.0).fired);
     EXPECT_DOUBLE_EQ(hold.update(3, {6, 0}, 400 * ms, 5.0).held_ms, 0.0);  // new label

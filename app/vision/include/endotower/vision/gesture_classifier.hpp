@@ -16,8 +16,9 @@
 // the network as OpenCV FileStorage YAML, then "fnv1a " and the FNV-1a 64-bit hash of
 // everything before it as 16 hex digits and "\n". parse()/load() refuse another
 // header, a hash mismatch, or a network that is not features-hidden-7, with a
-// message naming the file (the network must be 6-N-7 or 9-N-8). serialise() gives the bytes (the caller writes them
-// atomically). classify() is for the per-frame path: no exceptions, no allocation.
+// message naming the file (the network must be 6-N-7 or 9-N-8). serialise() gives the bytes (the
+// caller writes them atomically). classify() is for the per-frame path: no exceptions, no
+// allocation.
 #pragma once
 
 #include <array>
@@ -32,7 +33,8 @@ namespace endotower::vision {
 
 constexpr int kGestureLabelCount = 7;
 inline constexpr std::array<const char*, kGestureLabelCount> kGestureLabels = {
-    "open_grasper", "closed_grasper", "open_scissors", "closed_scissors", "cross", "triangle", "double_triangle"};
+    "open_grasper", "closed_grasper", "open_scissors",  "closed_scissors",
+    "cross",        "triangle",       "double_triangle"};
 int gesture_label_index(const std::string& label);  // -1 if not one of kGestureLabels
 
 struct GestureTrainParams {
@@ -50,7 +52,7 @@ struct GestureSample {
 };
 
 struct GestureResult {
-    int label = -1;  // index in kGestureLabels
+    int label = -1;         // index in kGestureLabels
     double confidence = 0;  // the winning output, clamped to 0..1
 };
 
@@ -62,7 +64,8 @@ public:
     GestureFeatureSet features() const { return features_; }
     GestureSegmentation segmentation() const { return segmentation_; }
 
-    bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params, std::string& error);
+    bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
+               std::string& error);
     GestureResult classify(const GestureFeatures& f) const;
 
     std::string serialise() const;

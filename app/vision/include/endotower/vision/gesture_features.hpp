@@ -38,10 +38,13 @@ struct GestureFeatures {
     double centroid_x = 0, centroid_y = 0;  // in mask pixels
 
     // The classifier's input: the book's six, or the six and the three extras.
-    int count(GestureFeatureSet set) const { return set == GestureFeatureSet::kBook ? kBookCount : kExtendedCount; }
+    int count(GestureFeatureSet set) const {
+        return set == GestureFeatureSet::kBook ? kBookCount : kExtendedCount;
+    }
     std::array<float, kExtendedCount> as_vector() const;
 };
 
-GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height, int stride);
+GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
+                                         int stride);
 
 }  // namespace endotower::vision

@@ -32,8 +32,8 @@
 
 #include "endotower/hal/frame.hpp"
 #include "endotower/vision/gesture_features.hpp"
-#include "endotower/vision/tool_pose.hpp"
 #include "endotower/vision/tool_likelihood.hpp"
+#include "endotower/vision/tool_pose.hpp"
 
 namespace endotower::vision {
 
@@ -53,9 +53,9 @@ struct GestureSegmenterParams {
 };
 
 struct GestureBlob {
-    Point2 tip;             // input frame pixels
-    double radius_px = 0;   // shaft radius, input frame pixels
-    int entries = 1;        // rim entries: 2 = two tools in one region
+    Point2 tip;            // input frame pixels
+    double radius_px = 0;  // shaft radius, input frame pixels
+    int entries = 1;       // rim entries: 2 = two tools in one region
     GestureFeatures features;
 };
 

@@ -55,7 +55,8 @@ struct GestureStageParams {
 
 class GestureStage final : public app::AnalysisStage {
 public:
-    GestureStage(GestureSegmenter& segmenter, const GestureClassifier& classifier, GestureStageParams params = {})
+    GestureStage(GestureSegmenter& segmenter, const GestureClassifier& classifier,
+                 GestureStageParams params = {})
         : segmenter_(segmenter), classifier_(classifier), params_(params), hold_(params.hold) {}
     std::string_view name() const override { return "gestures"; }
     void configure(const hal::FrameFormat& format) override;
