@@ -199,7 +199,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     }
     if (const YAML::Node a = root["analysis"]) {
         if (!r.keys(a, "analysis", {"stage", "tracker", "tool_model", "tool_diameter_mm", "timeout_ms", "virtual_cost_ms",
-                                  "max_overlay_age", "regions"}) ||
+                                  "max_overlay_age", "regions", "gestures"}) ||
             !r.text(a, "stage", "analysis.stage", c.stage) || !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
             !r.text(a, "tool_model", "analysis.tool_model", c.tool_model) ||
             !r.number(a, "tool_diameter_mm", "analysis.tool_diameter_mm", 1, 20, c.tool_diameter_mm) ||
@@ -216,6 +216,16 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (c.tracker == "likelihood" && c.tool_model.empty())
             return r.fail(a["tracker"], "analysis.tracker",
                           "the likelihood tracker needs analysis.tool_model (a file of 'endotower train-tool-model')");
+        if (const YAML::Node g = a["gestures"]) {
+            if (!g.IsMap()) return r.fail(g, "analysis.gestures", "expected a map {model: FILE, hold_ms: N}");
+            if (!r.keys(g, "analysis.gestures", {"model", "hold_ms"}) ||
+                !r.text(g, "model", "analysis.gestures.model", c.gesture_model) ||
+                !r.number(g, "hold_ms", "analysis.gestures.hold_ms", 0, 60000, c.gesture_hold_ms))
+                return false;
+            if (c.gesture_model.empty())
+                return r.fail(g, "analysis.gestures.model", "missing (a file of 'endotower train-gestures')");
+            c.gestures = true;
+        }
     }
     const YAML::Node analysis = root["analysis"];  // checked to be a mapping above
     if (const YAML::Node g = analysis ? analysis["regions"] : analysis) {
@@ -242,8 +252,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     }
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
-    for (std::string* p :
-         {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model, &c.calibration})
+    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model,
+                           &c.calibration, &c.gesture_model})
         *p = resolve(base, *p);
     out = std::move(c);
     return true;

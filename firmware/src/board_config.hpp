@@ -35,6 +35,10 @@ struct BoardConfig {
 
     // calibration: the scope's calibration file (endotower calibrate), "" = none
     std::string calibration;
+    // analysis.gestures (issue 6): on when the map is present
+    bool gestures = false;
+    std::string gesture_model;     // a file of 'endotower train-gestures'
+    double gesture_hold_ms = 1000.0;  // held still this long before it fires
 
     // sim
     std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;

@@ -19,5 +19,6 @@ int run_eval_command(const Args& args);
 int run_scene_command(const Args& args);
 int run_train_tool_model_command(const Args& args);
 int run_calibrate_command(const Args& args);
+int run_train_gestures_command(const Args& args);
 
 }  // namespace endotower::firmware

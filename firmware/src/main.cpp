@@ -27,6 +27,7 @@ constexpr Command kCommands[] = {
     {"scene", run_scene_command, "render a scenario: frames with exact ground truth"},
     {"train-tool-model", run_train_tool_model_command, "train the per-pixel tool likelihood of the likelihood tracker"},
     {"calibrate", run_calibrate_command, "calibrate the scope (centre, focal length, distortion), write its file"},
+    {"train-gestures", run_train_gestures_command, "train the tool-gesture classifier from labelled recordings"},
 };
 
 void print_help() {

@@ -25,6 +25,7 @@
 #include "endotower/system/syscall.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/eval/derived_truth.hpp"
+#include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/region_stage.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
@@ -260,6 +261,27 @@ int run_sim_command(const Args& args) {
     vision::RegionTracker region_tracker(region_params);
     vision::RegionStage regions(region_tracker);
     for (vision::RegionMark& m : marks) regions.schedule(std::move(m));
+    // Gestures (issue 6): a wrong or corrupt model disables them, never the video.
+    vision::GestureClassifier gesture_classifier;
+    vision::ToolLikelihood gesture_tool_model;
+    bool gestures = false;
+    if (board.gestures) {
+        gestures = gesture_classifier.load(board.gesture_model, error);
+        if (gestures && gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
+            !gesture_tool_model.load(board.tool_model, error)) {
+            error = "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
+            gestures = false;
+        }
+        if (!gestures)
+            std::fprintf(stderr, "endotower sim: analysis.gestures.model: %s; gesture recognition disabled\n",
+                         error.c_str());
+    }
+    vision::GestureSegmenterParams gesture_seg;
+    gesture_seg.method = gesture_classifier.segmentation();
+    vision::GestureSegmenter gesture_segmenter(&gesture_tool_model, gesture_seg);
+    vision::GestureStageParams gesture_params;
+    gesture_params.hold.hold_ms = board.gesture_hold_ms;
+    vision::GestureStage gesture_stage(gesture_segmenter, gesture_classifier, gesture_params);
     app::StageChain chain;
     if (board.stage == "status_badge") chain.add(&badge);
     if (board.tracker != "none") chain.add(&tracking);
@@ -287,6 +309,7 @@ int run_sim_command(const Args& args) {
             tracking.set_camera({cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected, board.tool_diameter_mm);
         }
     }
+    if (gestures) chain.add(&gesture_stage);
     if (!a.regions.empty() || marks.size() > 0) chain.add(&regions);
     app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 

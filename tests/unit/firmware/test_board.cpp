@@ -29,6 +29,9 @@ TEST(Board, TheShippedSimBoardLoads) {
     EXPECT_TRUE(fs::exists(b.sim_input)) << b.sim_input;
     EXPECT_TRUE(fs::exists(b.sim_events)) << b.sim_events;
     EXPECT_FALSE(b.sim_realtime);
+    EXPECT_TRUE(b.gestures);
+    EXPECT_TRUE(fs::exists(b.gesture_model)) << b.gesture_model;
+    EXPECT_DOUBLE_EQ(b.gesture_hold_ms, 1000.0);
 }
 
 TEST(Board, ValuesAndRelativePaths) {
@@ -103,6 +106,14 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\nvideo: [1, 2\n", "3: not valid YAML: end of sequence flow not found"},
         {"board: t\n? [a, b]\n: c\n", "2: field '(top level)': a key must be a plain name"},
         {"board: t\nsim:\n  ? {x: 1}\n  : y\n", "3: field 'sim': a key must be a plain name"},
+        {"board: t\nanalysis:\n  gestures: {model: g.yml, hold: 3}\n",
+         "3: field 'analysis.gestures.hold': unknown key (expected one of: model, hold_ms)"},
+        {"board: t\nanalysis:\n  gestures:\n    hold_ms: 500\n",
+         "4: field 'analysis.gestures.model': missing (a file of 'endotower train-gestures')"},
+        {"board: t\nanalysis:\n  gestures:\n    model: g.yml\n    hold_ms: -5\n",
+         "5: field 'analysis.gestures.hold_ms': must be between 0 and 60000, got -5"},
+        {"board: t\nanalysis:\n  gestures: on\n",
+         "3: field 'analysis.gestures': expected a map {model: FILE, hold_ms: N}"},
     };
     for (const auto& c : cases) {
         const std::string p = write_board("bad.yaml", c.text);

@@ -1,0 +1,79 @@
+// GestureSegmenter: finds the tool tips whose shape the gesture classifier reads.
+//
+// Per frame, on the frame reduced to `analysis_width` (640) columns:
+//  1. a tool mask, by one of two methods (`method`):
+//     kMorphology (the book, eq. 3.3-3.5): grey A = 255 - luma (tools are the dark
+//       objects here, the book's were the bright ones); background reduction
+//       A - (A o B1) with a square B1 of `large_element_fraction` (0.1) x width, larger
+//       than a tool; modified background reduction A + (A o B2) with a square B2 of
+//       `small_element` (3) px, smaller than a tool (saturating); threshold at
+//       `high_threshold` (200);
+//     kLikelihood (default; measured better, docs/gestures.md): the learned tool
+//       probability (ToolLikelihood, borrowed), 5x5 Gaussian, threshold `threshold`
+//       (128 = even odds), 3x3 opening;
+//     both then only inside the lit field of view (as LikelihoodToolTracker);
+//  2. 8-connected regions of at least `min_area_fraction` (0.002) of the picture that
+//     reach within `border_touch_fraction` (0.06) x width of its edge (tools enter
+//     from outside the picture) and whose length (principal axis, second moments) is
+//     at least `min_elongation` (2.5) x their width; the largest `kMaxBlobs` (2);
+//  3. per region, the tip: the pixel farthest from where it enters (from both entries
+//     when two tools cross and meet the rim twice); the shaft radius r: the largest
+//     distance-transform value near the entry; the tip window: the region's pixels
+//     within `window_radii` (8) x r of the tip (jaws and a little shaft), on which
+//     the six features are measured (GestureFeatures).
+// Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
+// Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
+// allocated in configure().
+#pragma once
+
+#include <array>
+#include <memory>
+#include <span>
+
+#include "endotower/hal/frame.hpp"
+#include "endotower/vision/gesture_features.hpp"
+#include "endotower/vision/tool_likelihood.hpp"
+#include "endotower/vision/tool_pose.hpp"
+
+namespace endotower::vision {
+
+enum class GestureSegmentation { kMorphology, kLikelihood };
+
+struct GestureSegmenterParams {
+    GestureSegmentation method = GestureSegmentation::kLikelihood;
+    int analysis_width = 640;
+    double large_element_fraction = 0.1;
+    int small_element = 3;
+    int high_threshold = 200;
+    int threshold = 128;
+    double min_area_fraction = 0.002;
+    double border_touch_fraction = 0.06;
+    double min_elongation = 2.5;
+    double window_radii = 8.0;
+};
+
+struct GestureBlob {
+    Point2 tip;            // input frame pixels
+    double radius_px = 0;  // shaft radius, input frame pixels
+    int entries = 1;       // rim entries: 2 = two tools in one region
+    GestureFeatures features;
+};
+
+class GestureSegmenter {
+public:
+    static constexpr std::size_t kMaxBlobs = 2;
+    // `model` is borrowed and must outlive the segmenter; it may be null for kMorphology.
+    GestureSegmenter(const ToolLikelihood* model, GestureSegmenterParams params = {});
+    ~GestureSegmenter();
+    const GestureSegmenterParams& params() const { return params_; }
+    void configure(const hal::FrameFormat& format);
+    std::size_t segment(const hal::Frame& frame, std::span<GestureBlob, kMaxBlobs> out);
+
+private:
+    struct Work;
+    const ToolLikelihood* model_;
+    GestureSegmenterParams params_;
+    std::unique_ptr<Work> work_;
+};
+
+}  // namespace endotower::vision

@@ -1,0 +1,75 @@
+// GestureStage: tool-gesture recognition on the analysis path (book ch. 3).
+//
+// Per frame: GestureSegmenter finds up to two tool tips; each is classified
+// (GestureClassifier). One region with a gesture = the frame's gesture (a single tool,
+// or two crossing tools: cross / triangle / double triangle); two are two single-tool
+// calls (fig. 3.21) and the frame's label is null (each tool's own is listed).
+// A label below `min_confidence` (0.5) counts as none.
+// GestureHold: a gesture fires once, when the same label has been held for
+// `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
+// the hold began; moving or changing the label starts a new hold. Times are the
+// frames' capture times (exact on the virtual clock).
+// Trace member, every frame:
+//   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
+//               "tools": [{"label", "confidence", "tip_px": [x, y]}]}
+// Overlay: a square at each classified tip, filled when the gesture has fired.
+// Borrows the segmenter and the classifier.
+#pragma once
+
+#include <array>
+
+#include "endotower/app/analysis_stage.hpp"
+#include "endotower/vision/gesture_classifier.hpp"
+#include "endotower/vision/gesture_segmenter.hpp"
+
+namespace endotower::vision {
+
+struct GestureHoldParams {
+    double hold_ms = 1000.0;
+    double still_fraction = 0.03;
+};
+
+class GestureHold {
+public:
+    struct State {
+        int label = -1;  // -1: none
+        double held_ms = 0;
+        bool fired = false;  // true on the one frame the hold reaches hold_ms
+    };
+    explicit GestureHold(GestureHoldParams params = {}) : params_(params) {}
+    // `still_px`: the tolerance in the caller's pixels (still_fraction x width).
+    State update(int label, Point2 where, hal::Nanos t_ns, double still_px);
+
+private:
+    GestureHoldParams params_;
+    int label_ = -1;
+    Point2 anchor_;
+    hal::Nanos start_ns_ = 0;
+    bool fired_ = false;
+};
+
+struct GestureStageParams {
+    GestureHoldParams hold;
+    double min_confidence = 0.5;
+};
+
+class GestureStage final : public app::AnalysisStage {
+public:
+    GestureStage(GestureSegmenter& segmenter, const GestureClassifier& classifier,
+                 GestureStageParams params = {})
+        : segmenter_(segmenter), classifier_(classifier), params_(params), hold_(params.hold) {}
+    std::string_view name() const override { return "gestures"; }
+    void configure(const hal::FrameFormat& format) override;
+    void process(app::AnalysisContext& ctx) override;
+
+private:
+    GestureSegmenter& segmenter_;
+    const GestureClassifier& classifier_;
+    GestureStageParams params_;
+    GestureHold hold_;
+    std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs_{};
+    double still_px_ = 20;
+    int box_ = 10;
+};
+
+}  // namespace endotower::vision

@@ -1,0 +1,208 @@
+#include "endotower/vision/gesture_classifier.hpp"
+
+#include <algorithm>
+#include <cinttypes>
+#include <cstdio>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/ml.hpp>
+#include <sstream>
+
+namespace endotower::vision {
+
+namespace {
+
+constexpr const char* kMagic = "ETGES1\n";
+constexpr const char* kNode = "opencv_ml_ann_mlp";
+
+std::uint64_t fnv1a(const char* p, std::size_t n) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (std::size_t i = 0; i < n; ++i)
+        h = (h ^ static_cast<std::uint8_t>(p[i])) * 1099511628211ull;
+    return h;
+}
+
+const char* feature_name(GestureFeatureSet s) {
+    return s == GestureFeatureSet::kBook ? "book" : "extended";
+}
+const char* segmentation_name(GestureSegmentation s) {
+    return s == GestureSegmentation::kMorphology ? "morphology" : "likelihood";
+}
+
+}  // namespace
+
+int gesture_label_index(const std::string& label) {
+    for (int i = 0; i < kGestureLabelCount; ++i)
+        if (label == kGestureLabels[i]) return i;
+    return -1;
+}
+
+struct GestureClassifier::Net {
+    cv::Ptr<cv::ml::ANN_MLP> ann;
+    // Per-call buffers, sized once (classify() allocates nothing).
+    mutable cv::Mat input = cv::Mat(1, GestureFeatures::kExtendedCount, CV_32F),
+                    output = cv::Mat(1, kGestureLabelCount + 1, CV_32F);
+};
+
+GestureClassifier::GestureClassifier() : net_(std::make_unique<Net>()) {}
+GestureClassifier::~GestureClassifier() = default;
+
+bool GestureClassifier::trained() const {
+    return !net_->ann.empty() && net_->ann->isTrained();
+}
+
+bool GestureClassifier::train(const std::vector<GestureSample>& samples,
+                              const GestureTrainParams& params, std::string& error) {
+    const bool book = params.features == GestureFeatureSet::kBook;
+    const int nf = book ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
+    const int classes = book ? kGestureLabelCount : kGestureLabelCount + 1;
+    std::array<std::vector<const GestureSample*>, kGestureLabelCount + 1> by_class;
+    for (const GestureSample& s : samples)
+        if (s.features.valid && s.label >= 0 && s.label < classes) by_class[s.label].push_back(&s);
+    std::size_t most = 0;
+    for (const auto& c : by_class) most = std::max(most, c.size());
+    if (most == 0) {
+        error = "no training samples";
+        return false;
+    }
+    // Equal weight per class: the rarer classes' samples are repeated in turn.
+    cv::Mat x(0, nf, CV_32F), y(0, classes, CV_32F);
+    for (const auto& c : by_class)
+        for (std::size_t i = 0; !c.empty() && i < most; ++i) {
+            const auto v = c[i % c.size()]->features.as_vector();
+            cv::Mat row(1, nf, CV_32F);
+            for (int k = 0; k < nf; ++k) row.at<float>(0, k) = v[k];
+            x.push_back(row);
+            cv::Mat t(1, classes, CV_32F, cv::Scalar(0.1f));
+            t.at<float>(0, c[i % c.size()]->label) = 0.9f;
+            y.push_back(t);
+        }
+    try {
+        cv::theRNG().state = 0x12345678;  // ANN_MLP draws its initial weights from it
+        cv::Ptr<cv::ml::ANN_MLP> ann = cv::ml::ANN_MLP::create();
+        ann->setLayerSizes(cv::Mat_<int>({1, 3}, {nf, params.hidden, classes}));
+        ann->setActivationFunction(cv::ml::ANN_MLP::SIGMOID_SYM, 0, 0);
+        ann->setTrainMethod(cv::ml::ANN_MLP::BACKPROP, 0.05, 0.1);
+        ann->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS,
+                                              params.iterations, 1e-7));
+        if (!ann->train(cv::ml::TrainData::create(x, cv::ml::ROW_SAMPLE, y))) {
+            error = "backpropagation did not converge";
+            return false;
+        }
+        net_->ann = ann;
+    } catch (const cv::Exception& e) {
+        error = "training failed: " + e.msg;
+        return false;
+    }
+    features_ = params.features;
+    segmentation_ = params.segmentation;
+    return true;
+}
+
+GestureResult GestureClassifier::classify(const GestureFeatures& f) const {
+    GestureResult r;
+    if (!trained() || !f.valid) return r;
+    const int nf = f.count(features_);
+    const auto v = f.as_vector();
+    cv::Mat in = net_->input.colRange(0, nf);
+    for (int k = 0; k < nf; ++k) in.at<float>(0, k) = v[k];
+    try {
+        net_->ann->predict(in, net_->output);
+    } catch (const cv::Exception&) {
+        return r;
+    }
+    const float* o = net_->output.ptr<float>(0);
+    const int classes = net_->output.cols;
+    const int best = static_cast<int>(std::max_element(o, o + classes) - o);
+    r.confidence = std::clamp<double>(o[best], 0.0, 1.0);
+    r.label = best < kGestureLabelCount ? best : -1;  // "not a tool": no gesture
+    return r;
+}
+
+std::string GestureClassifier::serialise() const {
+    std::string body = kMagic;
+    body += std::string("features ") + feature_name(features_) + "\n";
+    body += std::string("segmentation ") + segmentation_name(segmentation_) + "\n";
+    if (trained()) {
+        cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
+                                       cv::FileStorage::FORMAT_YAML);
+        fs << kNode << "{";
+        net_->ann->write(fs);
+        fs << "}";
+        body += fs.releaseAndGetString();
+        if (body.back() != '\n') body += '\n';
+    }
+    char tail[32];
+    std::snprintf(tail, sizeof tail, "fnv1a %016" PRIx64 "\n", fnv1a(body.data(), body.size()));
+    return body + tail;
+}
+
+bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
+                              std::string& error) {
+    auto fail = [&](const std::string& what) {
+        error = name + ": " + what;
+        return false;
+    };
+    const std::string magic = kMagic;
+    if (bytes.compare(0, magic.size(), magic) != 0)
+        return fail("not a gesture model (expected the header ETGES1)");
+    constexpr std::size_t kTail = 6 + 16 + 1;
+    if (bytes.size() < magic.size() + kTail)
+        return fail("truncated (no 'fnv1a' checksum line at the end)");
+    const std::size_t body_size = bytes.size() - kTail;
+    if (bytes.compare(body_size, 6, "fnv1a ") != 0 || bytes.back() != '\n')
+        return fail("truncated (no 'fnv1a' checksum line at the end)");
+    char want[17];
+    std::snprintf(want, sizeof want, "%016" PRIx64, fnv1a(bytes.data(), body_size));
+    if (bytes.compare(body_size + 6, 16, want) != 0)
+        return fail("checksum mismatch (corrupt or edited model file)");
+    std::istringstream in(bytes.substr(magic.size(), body_size - magic.size()));
+    std::string key, features, segmentation;
+    in >> key >> features;
+    if (key != "features" || (features != "book" && features != "extended"))
+        return fail("line 2: expected 'features book' or 'features extended'");
+    in >> key >> segmentation;
+    if (key != "segmentation" || (segmentation != "morphology" && segmentation != "likelihood"))
+        return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
+    const GestureFeatureSet fs_set =
+        features == "book" ? GestureFeatureSet::kBook : GestureFeatureSet::kExtended;
+    const int nf = fs_set == GestureFeatureSet::kBook ? GestureFeatures::kBookCount
+                                                      : GestureFeatures::kExtendedCount;
+    const int classes =
+        fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
+    const std::size_t net_at = bytes.find('\n', bytes.find('\n', magic.size()) + 1) + 1;
+    cv::Ptr<cv::ml::ANN_MLP> ann;
+    try {
+        cv::FileStorage fs(
+            bytes.substr(net_at, body_size - net_at),
+            cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+        if (!fs.isOpened() || fs[kNode].empty()) return fail("no network in the file");
+        ann = cv::ml::ANN_MLP::create();
+        ann->read(fs[kNode]);
+    } catch (const cv::Exception& e) {
+        return fail("unreadable network (" + e.msg + ")");
+    }
+    const cv::Mat sizes = ann->getLayerSizes();
+    if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf ||
+        sizes.at<int>(1) < 1 || sizes.at<int>(2) != classes || !ann->isTrained())
+        return fail("the network is not " + std::to_string(nf) + "-N-" + std::to_string(classes) +
+                    " for the '" + features + "' features");
+    net_->ann = ann;
+    features_ = fs_set;
+    segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology
+                                                 : GestureSegmentation::kLikelihood;
+    return true;
+}
+
+bool GestureClassifier::load(const std::string& path, std::string& error) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) {
+        error = path + ": cannot open";
+        return false;
+    }
+    std::ostringstream s;
+    s << f.rdbuf();
+    return parse(s.str(), path, error);
+}
+
+}  // namespace endotower::vision

@@ -1,0 +1,91 @@
+#include "endotower/vision/gesture_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace endotower::vision {
+
+GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns, double still_px) {
+    const bool same = label >= 0 && label == label_ &&
+                      std::hypot(where.x - anchor_.x, where.y - anchor_.y) <= still_px;
+    if (!same) {
+        label_ = label;
+        anchor_ = where;
+        start_ns_ = t_ns;
+        fired_ = false;
+    }
+    State s;
+    s.label = label_;
+    if (label_ < 0) return s;
+    s.held_ms = static_cast<double>(t_ns - start_ns_) / 1e6;
+    if (!fired_ && s.held_ms >= params_.hold_ms) s.fired = fired_ = true;
+    return s;
+}
+
+void GestureStage::configure(const hal::FrameFormat& format) {
+    segmenter_.configure(format);
+    still_px_ = params_.hold.still_fraction * format.width;
+    box_ = std::max(6, format.height / 60);
+}
+
+void GestureStage::process(app::AnalysisContext& ctx) {
+    const std::size_t n =
+        segmenter_.segment(ctx.frame, std::span<GestureBlob, GestureSegmenter::kMaxBlobs>(blobs_));
+    std::array<GestureResult, GestureSegmenter::kMaxBlobs> results{};
+    for (std::size_t i = 0; i < n; ++i) {
+        results[i] = classifier_.classify(blobs_[i].features);
+        if (results[i].confidence < params_.min_confidence) results[i].label = -1;
+    }
+    // One region with a gesture: it is the frame's; two: two single-tool calls.
+    std::size_t gestures = 0, which = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if (results[i].label >= 0) ++gestures, which = i;
+    const bool one = gestures == 1;
+    const GestureHold::State s =
+        hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},
+                     ctx.frame.capture_ns, still_px_);
+
+    ctx.trace.begin_object("gesture");
+    if (s.label >= 0)
+        ctx.trace.field("label", kGestureLabels[s.label]);
+    else
+        ctx.trace.null_field("label");
+    ctx.trace.field("confidence", one ? results[which].confidence : 0.0)
+        .field("held_ms", s.held_ms)
+        .field("fired", s.fired)
+        .begin_array("tools");
+    for (std::size_t i = 0; i < n; ++i) {
+        ctx.trace.begin_object();
+        if (results[i].label >= 0)
+            ctx.trace.field("label", kGestureLabels[results[i].label]);
+        else
+            ctx.trace.null_field("label");
+        ctx.trace.field("confidence", results[i].confidence)
+            .begin_array("tip_px")
+            .value(blobs_[i].tip.x)
+            .value(blobs_[i].tip.y)
+            .end_array()
+            .end_object();
+    }
+    ctx.trace.end_array().end_object();
+
+    // A square at each classified tip; filled once the gesture is held long enough.
+    const bool held = one && s.held_ms >= params_.hold.hold_ms;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (results[i].label < 0) continue;
+        const int x = static_cast<int>(std::lround(blobs_[i].tip.x)) - box_ / 2;
+        const int y = static_cast<int>(std::lround(blobs_[i].tip.y)) - box_ / 2;
+        const app::Rgba c{255, static_cast<std::uint8_t>(60 + 25 * results[i].label), 40, 220};
+        if (held) {
+            ctx.overlay.fill({x, y, box_, box_}, c);
+        } else {
+            const int t = std::max(2, box_ / 5);
+            ctx.overlay.fill({x, y, box_, t}, c);
+            ctx.overlay.fill({x, y + box_ - t, box_, t}, c);
+            ctx.overlay.fill({x, y, t, box_}, c);
+            ctx.overlay.fill({x + box_ - t, y, t, box_}, c);
+        }
+    }
+}
+
+}  // namespace endotower::vision

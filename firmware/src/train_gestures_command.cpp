@@ -1,0 +1,157 @@
+// endotower train-gestures: trains the tool-gesture classifier (book ch. 3) from
+// labelled recordings and writes the model file atomically; --test scores it on
+// held-out recordings (per tip region, before the hold-still rule).
+#include <cstdio>
+#include <cstdlib>
+
+#include "commands.hpp"
+#include "endotower/system/syscall.hpp"
+#include "gesture_dataset.hpp"
+
+namespace endotower::firmware {
+
+namespace {
+
+void print_help() {
+    std::printf(
+        "usage: endotower train-gestures --scene DIR... [--test DIR]... --out FILE\n"
+        "                                [--features book|extended] [--segmentation "
+        "likelihood|morphology]\n"
+        "                                [--tool-model FILE] [--every N] [--hidden N] "
+        "[--iterations N]\n\n"
+        "Trains the gesture network (docs/gestures.md) on the tip regions of labelled\n"
+        "recordings and writes the model file atomically.\n\n"
+        "  --scene DIR        training recording: DIR/frames/*.png and DIR/truth.jsonl (the "
+        "output\n"
+        "                     of 'endotower scene', or a hand-labelled clip in that layout)\n"
+        "  --test DIR         held-out recording: prints the per-gesture accuracy on its tips\n"
+        "  --features F       book: the six features, 6-20-7 (the book's baseline);\n"
+        "                     extended: nine and a 'not a tool' class, 9-20-8 (default)\n"
+        "  --segmentation S   likelihood (default) or morphology (eq. 3.3-3.5)\n"
+        "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
+        "  --every N          use every N-th frame (default 1)\n"
+        "  --hidden N         hidden units (default 20)\n"
+        "  --iterations N     backpropagation epochs (default 3000)\n"
+        "  --out FILE         the model file (e.g. board/sim/models/gestures.yml)\n\n"
+        "Exit status: 0 written, 1 could not train or write, 2 bad usage or input.\n");
+}
+
+int usage_error(const std::string& m) {
+    std::fprintf(stderr, "endotower train-gestures: %s\n(see 'endotower train-gestures --help')\n",
+                 m.c_str());
+    return kExitBadInput;
+}
+
+bool whole(const std::string& v, long lo, long hi, long& out) {
+    char* end = nullptr;
+    out = std::strtol(v.c_str(), &end, 10);
+    return !v.empty() && *end == 0 && out >= lo && out <= hi;
+}
+
+}  // namespace
+
+int run_train_gestures_command(const Args& args) {
+    std::vector<std::string> scenes, tests;
+    std::string out, tool_model_path;
+    vision::GestureTrainParams params;
+    params.features = vision::GestureFeatureSet::kExtended;
+    long every = 1, hidden = 20, iterations = 3000;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& k = args[i];
+        if (k == "--help" || k == "-h") {
+            print_help();
+            return kExitOk;
+        }
+        if (i + 1 >= args.size()) return usage_error("option " + k + " needs a value");
+        const std::string& v = args[++i];
+        if (k == "--scene")
+            scenes.push_back(v);
+        else if (k == "--test")
+            tests.push_back(v);
+        else if (k == "--out")
+            out = v;
+        else if (k == "--tool-model")
+            tool_model_path = v;
+        else if (k == "--features") {
+            if (v != "book" && v != "extended")
+                return usage_error("--features: expected book or extended, got '" + v + "'");
+            params.features = v == "book" ? vision::GestureFeatureSet::kBook
+                                          : vision::GestureFeatureSet::kExtended;
+        } else if (k == "--segmentation") {
+            if (v != "likelihood" && v != "morphology")
+                return usage_error("--segmentation: expected likelihood or morphology, got '" + v +
+                                   "'");
+            params.segmentation = v == "morphology" ? vision::GestureSegmentation::kMorphology
+                                                    : vision::GestureSegmentation::kLikelihood;
+        } else if (k == "--every") {
+            if (!whole(v, 1, 100000, every))
+                return usage_error("--every needs a whole number >= 1, got '" + v + "'");
+        } else if (k == "--hidden") {
+            if (!whole(v, 1, 1000, hidden))
+                return usage_error("--hidden needs a whole number in 1..1000, got '" + v + "'");
+        } else if (k == "--iterations") {
+            if (!whole(v, 1, 1000000, iterations))
+                return usage_error("--iterations needs a whole number >= 1, got '" + v + "'");
+        } else
+            return usage_error("unknown option '" + k + "'");
+    }
+    if (out.empty()) return usage_error("give --out FILE");
+    if (scenes.empty()) return usage_error("give at least one --scene DIR");
+    params.hidden = static_cast<int>(hidden);
+    params.iterations = static_cast<int>(iterations);
+    std::string error;
+    vision::ToolLikelihood tool_model;
+    if (params.segmentation == vision::GestureSegmentation::kLikelihood) {
+        if (tool_model_path.empty())
+            return usage_error("likelihood segmentation needs --tool-model FILE");
+        if (!tool_model.load(tool_model_path, error)) return usage_error(error);
+    }
+    vision::GestureSegmenterParams seg_params;
+    seg_params.method = params.segmentation;
+    vision::GestureSegmenter segmenter(&tool_model, seg_params);
+
+    std::vector<vision::GestureSample> samples;
+    GestureDatasetStats stats;
+    for (const std::string& d : scenes)
+        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
+                                 params.features == vision::GestureFeatureSet::kExtended))
+            return usage_error(error);
+    std::array<int, vision::kGestureLabelCount + 1> per_class{};
+    for (const auto& s : samples) ++per_class[s.label];
+    std::printf("train-gestures: %d frames, %d tip regions, %d unlabelled, %zu samples:",
+                stats.frames, stats.blobs, stats.unlabelled, samples.size());
+    for (int c = 0; c < vision::kGestureLabelCount; ++c)
+        std::printf(" %s %d", vision::kGestureLabels[c], per_class[c]);
+    std::printf(" not_a_tool %d\n", per_class[vision::kNotATool]);
+    vision::GestureClassifier classifier;
+    if (!classifier.train(samples, params, error)) {
+        std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());
+        return kExitFailure;
+    }
+    for (const std::string& d : tests) {
+        std::vector<vision::GestureSample> held_out;
+        GestureDatasetStats ts;
+        if (!add_gesture_samples(d, segmenter, 1, held_out, ts, error, 0.08, true))
+            return usage_error(error);
+        std::array<int, vision::kGestureLabelCount + 1> total{}, right{};
+        for (const auto& s : held_out) {
+            ++total[s.label];
+            const int got = classifier.classify(s.features).label;
+            if (got == s.label || (got < 0 && s.label == vision::kNotATool)) ++right[s.label];
+        }
+        std::printf("test %s:", d.c_str());
+        for (int c = 0; c < vision::kGestureLabelCount; ++c)
+            if (total[c] > 0)
+                std::printf(" %s %d/%d", vision::kGestureLabels[c], right[c], total[c]);
+        std::printf(" | tissue rejected %d/%d\n", right[vision::kNotATool],
+                    total[vision::kNotATool]);
+    }
+    if (!system::write_file_atomic(out, classifier.serialise(), error)) {
+        std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());
+        return kExitFailure;
+    }
+    std::printf("train-gestures: -> %s\n", out.c_str());
+    return kExitOk;
+}
+
+}  // namespace endotower::firmware

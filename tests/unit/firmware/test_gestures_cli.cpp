@@ -1,0 +1,172 @@
+// Tool gestures end to end (issue 6): the shipped model on simulator suites never
+// used in training (each at its own seed), train-gestures, a corrupt model in `sim`,
+// and the confusion from `eval` on a rendered suite.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "endotower/vision/gesture_classifier.hpp"
+#include "gesture_dataset.hpp"
+
+namespace fs = std::filesystem;
+using namespace endotower;
+
+namespace {
+
+const std::string kRoot = ENDOTOWER_SOURCE_DIR;
+const std::string kModels = kRoot + "/board/sim/models/";
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+class Gestures : public ::testing::Test {
+protected:
+    static fs::path dir() {
+        return fs::temp_directory_path() / ("endotower_gestures_" + std::to_string(::getpid()));
+    }
+    static int run(const std::string& args, const std::string& tag = "out") {
+        const std::string cmd = std::string(ENDOTOWER_BINARY) + " " + args + " >" +
+                                (dir() / (tag + ".txt")).string() + " 2>" +
+                                (dir() / (tag + ".err")).string();
+        const int st = std::system(cmd.c_str());
+        return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    }
+    // Renders a suite once per test run (at its own seed unless `seed` is given).
+    static fs::path scene(const std::string& scenario, const std::string& extra = "") {
+        std::string name = fs::path(scenario).stem().string() + extra;
+        for (char& ch : name)
+            if (ch == ' ' || ch == '-') ch = '_';
+        const fs::path out = dir() / name;
+        if (!fs::exists(out / "truth.jsonl")) {
+            fs::create_directories(dir());
+            const int rc = run("scene --scenario " + kRoot + "/board/sim/scenarios/" + scenario +
+                                   " --out " + out.string() + " " + extra,
+                               "scene");
+            EXPECT_EQ(rc, 0) << slurp(dir() / "scene.err");
+        }
+        return out;
+    }
+    static void TearDownTestSuite() { fs::remove_all(dir()); }
+
+    // Per-gesture share of tip regions classified right by the shipped model.
+    static std::array<double, vision::kGestureLabelCount> accuracy(
+        const std::vector<fs::path>& scenes) {
+        vision::ToolLikelihood tool_model;
+        vision::GestureClassifier classifier;
+        std::string error;
+        EXPECT_TRUE(tool_model.load(kModels + "tool_likelihood.bin", error)) << error;
+        EXPECT_TRUE(classifier.load(kModels + "gestures.yml", error)) << error;
+        vision::GestureSegmenterParams p;
+        p.method = classifier.segmentation();
+        vision::GestureSegmenter segmenter(&tool_model, p);
+        std::vector<vision::GestureSample> samples;
+        firmware::GestureDatasetStats stats;
+        for (const fs::path& s : scenes)
+            EXPECT_TRUE(
+                firmware::add_gesture_samples(s.string(), segmenter, 1, samples, stats, error))
+                << error;
+        std::array<int, vision::kGestureLabelCount> total{}, right{};
+        for (const auto& s : samples) {
+            ++total[s.label];
+            right[s.label] += classifier.classify(s.features).label == s.label;
+        }
+        std::array<double, vision::kGestureLabelCount> rate{};
+        for (int c = 0; c < vision::kGestureLabelCount; ++c)
+            rate[c] = total[c] ? double(right[c]) / total[c] : -1.0;
+        return rate;
+    }
+};
+
+}  // namespace
+
+TEST_F(Gestures, ShippedModelMeetsTheSingleToolGoalOnHeldOutSuites) {
+    // The seven orientations of fig. 3.22 for both tools, and fig. 3.12e-h (two
+    // separate tools = two single-tool calls), at the suites' own seeds.
+    const auto rate =
+        accuracy({scene("fig322_grasper_orientations.yaml"),
+                  scene("fig322_scissors_orientations.yaml"), scene("fig312_nonoverlapping.yaml")});
+    // The issue's goal: every single-tool gesture >= 95 %. (The two-tool gestures do
+    // not meet theirs yet: docs/gestures.md.)
+    for (int c = 0; c < 4; ++c) EXPECT_GE(rate[c], 0.95) << vision::kGestureLabels[c];
+}
+
+TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
+    const fs::path train = scene("fig322_grasper_orientations.yaml", "--seed 77");
+    const fs::path model = dir() / "m.yml";
+    ASSERT_EQ(run("train-gestures --scene " + train.string() + " --tool-model " + kModels +
+                  "tool_likelihood.bin --iterations 200 --features book --out " + model.string()),
+              0)
+        << slurp(dir() / "out.err");
+    vision::GestureClassifier c;
+    std::string error;
+    ASSERT_TRUE(c.load(model.string(), error)) << error;
+    EXPECT_EQ(c.features(), vision::GestureFeatureSet::kBook);
+    EXPECT_EQ(run("train-gestures --scene " + (dir() / "nowhere").string() + " --out " +
+                  model.string() + " --tool-model " + kModels + "tool_likelihood.bin"),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err").find("nowhere: no frames/ folder"), std::string::npos);
+    EXPECT_EQ(
+        run("train-gestures --scene " + train.string() + " --features six --out " + model.string()),
+        2);
+    EXPECT_NE(slurp(dir() / "out.err").find("--features: expected book or extended"),
+              std::string::npos);
+}
+
+namespace {
+
+fs::path board(const fs::path& dir, const std::string& model, double hold_ms) {
+    const fs::path b = dir / ("board_" + std::to_string(static_cast<int>(hold_ms)) + ".yaml");
+    std::ofstream(b) << "board: test\nanalysis:\n  stage: none\n  tracker: none\n  tool_model: "
+                     << kModels << "tool_likelihood.bin\n  gestures: {model: " << model
+                     << ", hold_ms: " << hold_ms << "}\nsim:\n  events: " << kRoot
+                     << "/board/sim/events.txt\n";
+    return b;
+}
+
+}  // namespace
+
+TEST_F(Gestures, CorruptModelDisablesGesturesNotTheVideo) {
+    const fs::path rec = scene("fig322_grasper_orientations.yaml");
+    std::string bytes = slurp(kModels + "gestures.yml");
+    ASSERT_FALSE(bytes.empty());
+    bytes[bytes.size() / 2] ^= 0x04;
+    std::ofstream(dir() / "corrupt.yml") << bytes;
+    const fs::path trace = dir() / "corrupt_trace.jsonl";
+    ASSERT_EQ(run("sim --board " + board(dir(), (dir() / "corrupt.yml").string(), 1000).string() +
+                  " --input " + (rec / "frames").string() + " --trace " + trace.string() +
+                  " --out " + (dir() / "c.mkv").string()),
+              0)
+        << slurp(dir() / "out.err");
+    const std::string err = slurp(dir() / "out.err");
+    EXPECT_NE(err.find("corrupt.yml: checksum mismatch"), std::string::npos) << err;
+    EXPECT_NE(err.find("gesture recognition disabled"), std::string::npos) << err;
+    const std::string t = slurp(trace);
+    EXPECT_EQ(t.find("\"gesture\""), std::string::npos);
+    EXPECT_NE(slurp(dir() / "out.txt").find("28 frames in, 28 out"), std::string::npos)
+        << slurp(dir() / "out.txt");
+}
+
+TEST_F(Gestures, EvalConfusionOnARenderedSuite) {
+    // Ten frames per state (the book's ten trials) and a hold of 120 ms (3 frames).
+    const fs::path rec = scene("fig322_grasper_orientations.yaml", "--scale 5");
+    const fs::path trace = dir() / "g_trace.jsonl";
+    ASSERT_EQ(run("sim --board " + board(dir(), kModels + "gestures.yml", 120).string() +
+                  " --input " + (rec / "frames").string() + " --trace " + trace.string() +
+                  " --out " + (dir() / "g.mkv").string()),
+              0)
+        << slurp(dir() / "out.err");
+    const int rc = run("eval --trace " + trace.string() + " --truth " +
+                       (rec / "truth.jsonl").string() + " --min-gesture-rate 0.95");
+    const std::string out = slurp(dir() / "out.txt");
+    EXPECT_EQ(rc, 0) << out << slurp(dir() / "out.err");
+    // Seven orientations x (open, closed) = 14 trials; the rate threshold is the goal.
+    EXPECT_NE(out.find("gestures: 14 trials"), std::string::npos) << out;
+}
