@@ -18,6 +18,8 @@
 // it is probed once a second and the mode is set again when it comes back.
 // Writeback (for tests, vkms): with `writeback`, request_readback() makes the next
 // present also write the composed picture into a buffer that readback() returns.
+// That one commit routes the CRTC to the writeback connector alone (vkms in Linux 6.1
+// refuses the monitor and writeback as clones); the next gives it back to the monitor.
 // Parameters (defaults): card /dev/dri/card0, connector "" (the first connected),
 // mode 1920x1080@60, zero_copy true, atomic true, writeback false.
 // Not thread-safe: open() and every later call from one thread (it owns the EGL context).
