@@ -25,6 +25,17 @@ struct BoardConfig {
     double analysis_virtual_cost_ms = 0.0;
     int max_overlay_age = 0;
 
+    // display (drivers/display): display.card, .connector, .mode "WxH@HZ", .zero_copy, .atomic
+    std::string display_card = "/dev/dri/card0";
+    std::string display_connector;  // "" = the first connected
+    int display_width = 1920, display_height = 1080;
+    double display_refresh_hz = 60.0;
+    bool display_zero_copy = true, display_atomic = true;
+    double latency_budget_ms = 0.0;  // video.latency_budget_ms: capture -> flip limit; 0 = period + 2 ms
+
+    // paths: calibration, gesture_model (files checked by selftest), storage (a writable directory)
+    std::string calibration, gesture_model, storage;
+
     // sim
     std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;
     bool sim_realtime = false;

@@ -49,6 +49,38 @@ TEST(Board, ValuesAndRelativePaths) {
     EXPECT_TRUE(b.sim_realtime);
 }
 
+TEST(Board, DisplayAndPaths) {
+    const std::string p = write_board("display.yaml",
+                                      "board: t\n"
+                                      "video: {latency_budget_ms: 18.7}\n"
+                                      "display: {card: /dev/dri/card1, connector: HDMI-A-2, mode: 1280x720@50,\n"
+                                      "          zero_copy: false, atomic: false}\n"
+                                      "paths: {calibration: cal.yaml, gesture_model: /opt/m.yaml, storage: store}\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_EQ(b.display_card, "/dev/dri/card1");
+    EXPECT_EQ(b.display_connector, "HDMI-A-2");
+    EXPECT_EQ(b.display_width, 1280);
+    EXPECT_EQ(b.display_height, 720);
+    EXPECT_DOUBLE_EQ(b.display_refresh_hz, 50.0);
+    EXPECT_FALSE(b.display_zero_copy);
+    EXPECT_FALSE(b.display_atomic);
+    EXPECT_DOUBLE_EQ(b.latency_budget_ms, 18.7);
+    EXPECT_EQ(b.calibration, (fs::path(p).parent_path() / "cal.yaml").string());
+    EXPECT_EQ(b.gesture_model, "/opt/m.yaml");
+    EXPECT_EQ(b.storage, (fs::path(p).parent_path() / "store").string());
+
+    // Defaults: 1920x1080@60 on the first card's first connected connector.
+    BoardConfig d;
+    ASSERT_TRUE(load_board(write_board("plain.yaml", "board: t\ndisplay: {mode: 3840x2160}\n"), d, err)) << err;
+    EXPECT_EQ(d.display_card, "/dev/dri/card0");
+    EXPECT_EQ(d.display_connector, "");
+    EXPECT_EQ(d.display_width, 3840);
+    EXPECT_DOUBLE_EQ(d.display_refresh_hz, 60.0);
+    EXPECT_TRUE(d.display_zero_copy);
+}
+
 struct BadCase {
     const char* text;
     const char* message;  // after "FILE:"
@@ -56,11 +88,18 @@ struct BadCase {
 
 TEST(Board, ErrorsNameTheLineAndField) {
     const BadCase cases[] = {
+        {"board: t\ndisplay:\n  mode: 1920by1080\n",
+         "3: field 'display.mode': expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '1920by1080'"},
+        {"board: t\ndisplay:\n  mode: 1920x1080@0\n",
+         "3: field 'display.mode': expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '1920x1080@0'"},
+        {"board: t\ndisplay:\n  conector: HDMI-A-1\n",
+         "3: field 'display.conector': unknown key (expected one of: card, connector, mode, zero_copy, atomic)"},
+        {"board: t\npaths:\n  storage: [a]\n", "3: field 'paths.storage': expected a string"},
         {"board: t\nvideo:\n  latency_ms: fast\n",
          "3: field 'video.latency_ms': expected a number, got 'fast'"},
         {"board: t\nvideo:\n  latency_ms: -1\n", "3: field 'video.latency_ms': must be between 0 and 1000, got -1"},
         {"board: t\nvideo:\n  latncy_ms: 3\n",
-         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms, late_tolerance_ms)"},
+         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms, late_tolerance_ms, latency_budget_ms)"},
         {"board: t\nanalysis:\n  stage: magic\n",
          "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
         {"board: t\nanalysis:\n  tracker: cnn\n",
