@@ -9,7 +9,7 @@ seconds=${1:-60}
 cd "$root"
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
-for t in timeline trace_line board; do
+for t in timeline trace_line board hid_report; do
   work="build/fuzz/corpus-$t"
   rm -rf "$work" && mkdir -p "$work" && cp tests/fuzz/corpus/$t/* "$work/"
   echo "fuzz_$t: ${seconds} s"

@@ -43,6 +43,7 @@ while [ $# -gt 0 ]; do
 done
 [ $# -ge 1 ] || usage
 
+mkdir -p "$cache" && cache=$(cd "$cache" && pwd) || { say "cannot create cache directory $cache"; exit 125; }
 guest=$("$here/setup.sh" "$cache")
 rc=$?
 if [ $rc -eq 77 ]; then say "SKIP: the qemu guest cannot run on this machine (see above)"; exit 77; fi
@@ -85,12 +86,12 @@ mount -t configfs configfs /sys/kernel/config 2>/dev/null
 mount -t debugfs debugfs /sys/kernel/debug 2>/dev/null
 mkdir -p /dev/pts /dev/shm && mount -t devpts devpts /dev/pts && mount -t tmpfs tmpfs /dev/shm
 STAGE2
-    echo "mount -o bind $(printf %q "$guest/root/lib/modules/$kver") /usr/lib/modules/$kver || finish 125"
+    echo "mount -o bind $(printf %q "$guest/root/lib/modules/$kver") /usr/lib/modules/$kver || { echo 'run-in-guest: cannot bind the module tree' >>\"\$R/stderr\"; finish 125; }"
     for m in $modules; do
         # NAME:OPT=V:OPT2=V -> modprobe NAME OPT=V OPT2=V
         echo "modprobe $(printf '%q ' ${m//:/ }) >>\"\$R/stderr\" 2>&1 || { echo \"run-in-guest: modprobe ${m%%:*} failed\" >>\"\$R/stderr\"; finish 125; }"
     done
-    echo "cd $(printf %q "$PWD") || finish 125"
+    echo "cd $(printf %q "$PWD") || { echo 'run-in-guest: cannot cd to $(printf %q "$PWD")' >>\"\$R/stderr\"; finish 125; }"
     echo "$(printf '%q ' "$@") >\"\$R/stdout\" 2>>\"\$R/stderr\" </dev/null"
     echo 'finish $?'
 } >"$results/guest.sh"
