@@ -2,10 +2,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
+
+#include "endotower/v4l2/capture_format.hpp"
 
 namespace endotower::firmware {
 
@@ -78,6 +81,20 @@ struct Reader {
         return true;
     }
 
+    // An integer written in decimal or as 0xHEX (USB ids).
+    bool id(const YAML::Node& map, const char* key, const std::string& field, int hi, int& out) {
+        const YAML::Node n = map[key];
+        if (!n) return true;
+        const std::string t = n.IsScalar() ? n.Scalar() : std::string();
+        char* end = nullptr;
+        const long v = std::strtol(t.c_str(), &end, 0);
+        if (t.empty() || end == nullptr || *end != 0 || v < 0 || v > hi)
+            return fail(n, field, "expected a number from 0 to " + std::to_string(hi) + " (0x... for hex), got '" +
+                                      (n.IsScalar() ? t : "?") + "'");
+        out = static_cast<int>(v);
+        return true;
+    }
+
     bool boolean(const YAML::Node& map, const char* key, const std::string& field, bool& out) {
         const YAML::Node n = map[key];
         if (!n) return true;
@@ -127,7 +144,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         error = path + ": board file is empty";
         return false;
     }
-    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "display", "paths"})) return false;
+    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "display", "paths", "capture", "hid", "gpio"}))
+        return false;
     if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
         return false;
@@ -174,6 +192,45 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (!mode.empty() && !parse_mode(mode, c.display_width, c.display_height, c.display_refresh_hz))
             return r.fail(d["mode"], "display.mode", "expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '" + mode + "'");
         if (c.display_card.empty()) return r.fail(d["card"], "display.card", "must name a device, e.g. /dev/dri/card0");
+    }
+    if (const YAML::Node v = root["capture"]) {
+        c.has_capture = true;
+        if (!r.keys(v, "capture", {"device", "format", "width", "height", "fps", "buffers", "input", "dv_timings"}) ||
+            !r.text(v, "device", "capture.device", c.capture_device) ||
+            !r.text(v, "format", "capture.format", c.capture_format) ||
+            !r.integer(v, "width", "capture.width", 16, 8192, c.capture_width) ||
+            !r.integer(v, "height", "capture.height", 16, 8192, c.capture_height) ||
+            !r.number(v, "fps", "capture.fps", 0, 500, c.capture_fps) ||
+            !r.integer(v, "buffers", "capture.buffers", 2, 32, c.capture_buffers) ||
+            !r.integer(v, "input", "capture.input", -1, 255, c.capture_input) ||
+            !r.text(v, "dv_timings", "capture.dv_timings", c.capture_dv_timings))
+            return false;
+        v4l2::CaptureFormat f{};
+        if (!v4l2::parse_capture_format(c.capture_format, f))
+            return r.fail(v["format"], "capture.format", "unknown format '" + c.capture_format + "' (expected yuyv, uyvy, nv12 or mjpeg)");
+        v4l2::DvTimingsName dv;
+        if (!c.capture_dv_timings.empty() && c.capture_dv_timings != "query" &&
+            !v4l2::parse_dv_timings_name(c.capture_dv_timings, dv))
+            return r.fail(v["dv_timings"], "capture.dv_timings",
+                          "expected 'query' or WIDTHxHEIGHTpRATE (e.g. 1920x1080p60), got '" + c.capture_dv_timings + "'");
+    }
+    if (const YAML::Node h = root["hid"]) {
+        c.has_hid = true;
+        if (!r.keys(h, "hid", {"vid", "pid", "serial", "usage_page"}) || !r.id(h, "vid", "hid.vid", 0xffff, c.hid_vid) ||
+            !r.id(h, "pid", "hid.pid", 0xffff, c.hid_pid) || !r.text(h, "serial", "hid.serial", c.hid_serial) ||
+            !r.id(h, "usage_page", "hid.usage_page", 0xffff, c.hid_usage_page))
+            return false;
+        if (!h["vid"] || !h["pid"]) return r.fail(h, "hid", "needs vid and pid (the handle's USB ids)");
+    }
+    if (const YAML::Node g = root["gpio"]) {
+        c.has_gpio = true;
+        if (!r.keys(g, "gpio", {"chip", "line", "active_low", "debounce_ms", "long_press_ms"}) ||
+            !r.text(g, "chip", "gpio.chip", c.gpio_chip) || !r.integer(g, "line", "gpio.line", 0, 1023, c.gpio_line) ||
+            !r.boolean(g, "active_low", "gpio.active_low", c.gpio_active_low) ||
+            !r.number(g, "debounce_ms", "gpio.debounce_ms", 0, 1000, c.gpio_debounce_ms) ||
+            !r.number(g, "long_press_ms", "gpio.long_press_ms", 0, 60000, c.gpio_long_press_ms))
+            return false;
+        if (c.gpio_chip.empty()) return r.fail(g, "gpio.chip", "missing (the gpiochip name, label or /dev path)");
     }
     if (const YAML::Node p = root["paths"]) {
         if (!r.keys(p, "paths", {"calibration", "gesture_model", "storage"}) ||

@@ -33,6 +33,23 @@ struct BoardConfig {
     bool display_zero_copy = true, display_atomic = true;
     double latency_budget_ms = 0.0;  // video.latency_budget_ms: capture -> flip limit; 0 = period + 2 ms
 
+    // capture (drivers/v4l2): capture.device, .format, .width, .height, .fps, .buffers,
+    // .input, .dv_timings (see v4l2_capture.hpp)
+    bool has_capture = false;
+    std::string capture_device = "/dev/video0", capture_format = "yuyv", capture_dv_timings;
+    int capture_width = 1920, capture_height = 1080, capture_buffers = 4, capture_input = -1;
+    double capture_fps = 0.0;
+    // hid (drivers/hid): hid.vid, .pid (hex "0x1209" or decimal), .serial, .usage_page
+    bool has_hid = false;
+    int hid_vid = 0, hid_pid = 0, hid_usage_page = 0;
+    std::string hid_serial;
+    // gpio (drivers/gpio): gpio.chip, .line, .active_low, .debounce_ms, .long_press_ms
+    bool has_gpio = false;
+    std::string gpio_chip;
+    int gpio_line = 0;
+    bool gpio_active_low = false;
+    double gpio_debounce_ms = 20.0, gpio_long_press_ms = 800.0;
+
     // paths: calibration, gesture_model (files checked by selftest), storage (a writable directory)
     std::string calibration, gesture_model, storage;
 

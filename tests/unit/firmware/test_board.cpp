@@ -81,6 +81,47 @@ TEST(Board, DisplayAndPaths) {
     EXPECT_TRUE(d.display_zero_copy);
 }
 
+TEST(Board, CaptureHandleAndButton) {
+    const std::string p = write_board("devices.yaml",
+                                      "board: t\n"
+                                      "capture: {device: /dev/video3, format: uyvy, width: 1280, height: 720,\n"
+                                      "          fps: 50, buffers: 5, input: 3, dv_timings: 1280x720p50}\n"
+                                      "hid: {vid: 0x1209, pid: 59248, serial: A1, usage_page: 0x0c}\n"
+                                      "gpio: {chip: gpiochip2, line: 17, active_low: true, debounce_ms: 15}\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_TRUE(b.has_capture);
+    EXPECT_EQ(b.capture_device, "/dev/video3");
+    EXPECT_EQ(b.capture_format, "uyvy");
+    EXPECT_EQ(b.capture_width, 1280);
+    EXPECT_EQ(b.capture_buffers, 5);
+    EXPECT_EQ(b.capture_input, 3);
+    EXPECT_EQ(b.capture_dv_timings, "1280x720p50");
+    EXPECT_DOUBLE_EQ(b.capture_fps, 50);
+    EXPECT_TRUE(b.has_hid);
+    EXPECT_EQ(b.hid_vid, 0x1209);
+    EXPECT_EQ(b.hid_pid, 0xe770);
+    EXPECT_EQ(b.hid_serial, "A1");
+    EXPECT_EQ(b.hid_usage_page, 0x0c);
+    EXPECT_TRUE(b.has_gpio);
+    EXPECT_EQ(b.gpio_chip, "gpiochip2");
+    EXPECT_EQ(b.gpio_line, 17);
+    EXPECT_TRUE(b.gpio_active_low);
+    EXPECT_DOUBLE_EQ(b.gpio_debounce_ms, 15);
+    EXPECT_DOUBLE_EQ(b.gpio_long_press_ms, 800);
+}
+
+// Every shipped board loads.
+TEST(Board, ShippedBoardsLoad) {
+    for (const char* name : {"sim", "vhw", "rpi5", "rk3588"}) {
+        BoardConfig b;
+        std::string err;
+        EXPECT_TRUE(load_board(std::string(ENDOTOWER_SOURCE_DIR "/board/") + name + "/board.yaml", b, err)) << err;
+        EXPECT_EQ(b.name, name);
+    }
+}
+
 struct BadCase {
     const char* text;
     const char* message;  // after "FILE:"
@@ -95,6 +136,14 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\ndisplay:\n  conector: HDMI-A-1\n",
          "3: field 'display.conector': unknown key (expected one of: card, connector, mode, zero_copy, atomic)"},
         {"board: t\npaths:\n  storage: [a]\n", "3: field 'paths.storage': expected a string"},
+        {"board: t\ncapture:\n  format: rgb3\n",
+         "3: field 'capture.format': unknown format 'rgb3' (expected yuyv, uyvy, nv12 or mjpeg)"},
+        {"board: t\ncapture:\n  dv_timings: 1080p\n",
+         "3: field 'capture.dv_timings': expected 'query' or WIDTHxHEIGHTpRATE (e.g. 1920x1080p60), got '1080p'"},
+        {"board: t\nhid:\n  vid: 0x12345\n  pid: 1\n",
+         "3: field 'hid.vid': expected a number from 0 to 65535 (0x... for hex), got '0x12345'"},
+        {"board: t\nhid:\n  vid: 0x1209\n", "3: field 'hid': needs vid and pid (the handle's USB ids)"},
+        {"board: t\ngpio:\n  line: 3\n", "3: field 'gpio.chip': missing (the gpiochip name, label or /dev path)"},
         {"board: t\nvideo:\n  latency_ms: fast\n",
          "3: field 'video.latency_ms': expected a number, got 'fast'"},
         {"board: t\nvideo:\n  latency_ms: -1\n", "3: field 'video.latency_ms': must be between 0 and 1000, got -1"},
