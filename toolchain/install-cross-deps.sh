@@ -41,7 +41,7 @@ if [ ${#missing[@]} -gt 0 ]; then
   "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-want="${target_packages[*]}"
+want="2 ${target_packages[*]}"  # bump the leading number when the unpacking changes
 if [ -f "$sysroot/.endotower-packages" ] && [ "$(cat "$sysroot/.endotower-packages")" = "$want" ]; then
   exit 0
 fi
@@ -62,5 +62,13 @@ echo "endotower: unpacking the arm64 sysroot into $sysroot" >&2
 rm -rf "$sysroot"
 mkdir -p "$sysroot"
 for deb in "$state"/archives/*.deb; do dpkg-deb -x "$deb" "$sysroot"; done
+# dpkg-deb -x runs no maintainer scripts: make the update-alternatives links that
+# the BLAS/LAPACK packages would (OpenCV links libblas.so.3 and liblapack.so.3).
+lib=$sysroot/usr/lib/aarch64-linux-gnu
+for so in libblas.so.3 liblapack.so.3; do
+  for impl in "$lib"/*/"$so"; do
+    [ -e "$impl" ] && [ ! -e "$lib/$so" ] && ln -s "${impl#"$lib"/}" "$lib/$so"
+  done
+done
 echo "$want" >"$sysroot/.endotower-packages"
 echo "endotower: arm64 sysroot ready: $sysroot ($(du -sh "$sysroot" | cut -f1))" >&2
