@@ -17,5 +17,7 @@ using Args = std::vector<std::string>;
 int run_sim_command(const Args& args);
 int run_eval_command(const Args& args);
 int run_scene_command(const Args& args);
+int run_run_command(const Args& args);
+int run_selftest_command(const Args& args);
 
 }  // namespace endotower::firmware

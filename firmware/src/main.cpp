@@ -25,6 +25,8 @@ constexpr Command kCommands[] = {
     {"sim", run_sim_command, "run on a recording, write the output video and a per-frame trace"},
     {"eval", run_eval_command, "score a trace against ground truth, write a report"},
     {"scene", run_scene_command, "render a scenario: frames with exact ground truth"},
+    {"run", run_run_command, "the appliance: capture device to monitor, from the board file"},
+    {"selftest", run_selftest_command, "check camera, handle, display, latency, files; write a report"},
 };
 
 void print_help() {
