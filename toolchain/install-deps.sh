@@ -12,7 +12,7 @@ packages=(
   libgpiod-dev libhidapi-dev libusb-1.0-0-dev
   # the qemu guest of tests/driver (real kernel drivers: vivid, uhid, gpio-sim, vkms)
   qemu-system-x86 busybox-static kmod linux-headers-amd64 linux-source-6.1 bc
-  v4l-utils gpiod libdrm-tests
+  v4l-utils gpiod libdrm-tests udev
 )
 
 missing=()

@@ -81,16 +81,21 @@ struct Reader {
         return true;
     }
 
-    // An integer written in decimal or as 0xHEX (USB ids).
-    bool id(const YAML::Node& map, const char* key, const std::string& field, int hi, int& out) {
+    // A 16-bit id, written 0x1209 or 4617.
+    bool id16(const YAML::Node& map, const char* key, const std::string& field, int& out) {
         const YAML::Node n = map[key];
         if (!n) return true;
         const std::string t = n.IsScalar() ? n.Scalar() : std::string();
-        char* end = nullptr;
-        const long v = std::strtol(t.c_str(), &end, 0);
-        if (t.empty() || end == nullptr || *end != 0 || v < 0 || v > hi)
-            return fail(n, field, "expected a number from 0 to " + std::to_string(hi) + " (0x... for hex), got '" +
-                                      (n.IsScalar() ? t : "?") + "'");
+        const bool hex = t.size() > 2 && t[0] == '0' && (t[1] == 'x' || t[1] == 'X');
+        std::size_t used = 0;
+        long v = -1;
+        try {
+            v = std::stol(t, &used, hex ? 16 : 10);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (t.empty() || used != t.size() || v < 0 || v > 0xffff)
+            return fail(n, field, "expected a 16-bit id like 0x1209, got '" + (n.IsScalar() ? t : "?") + "'");
         out = static_cast<int>(v);
         return true;
     }
@@ -122,6 +127,54 @@ std::string resolve(const fs::path& base, const std::string& p) {
     return (base / p).lexically_normal().string();
 }
 
+// capture:, button:, handle: (issue 9's input drivers).
+bool load_input_devices(Reader& r, const YAML::Node& root, BoardConfig& c) {
+    if (const YAML::Node n = root["capture"]) {
+        auto& k = c.capture;
+        k.present = true;
+        if (!r.keys(n, "capture", {"device", "format", "width", "height", "fps", "buffers", "input", "dv_timings"}) ||
+            !r.text(n, "device", "capture.device", k.device) || !r.text(n, "format", "capture.format", k.format) ||
+            !r.integer(n, "width", "capture.width", 16, 8192, k.width) ||
+            !r.integer(n, "height", "capture.height", 16, 8192, k.height) ||
+            !r.number(n, "fps", "capture.fps", 0, 1000, k.fps) ||
+            !r.integer(n, "buffers", "capture.buffers", 2, 16, k.buffers) ||
+            !r.integer(n, "input", "capture.input", -1, 255, k.input) ||
+            !r.text(n, "dv_timings", "capture.dv_timings", k.dv_timings))
+            return false;
+        v4l2::CaptureFormat f{};
+        if (!v4l2::parse_capture_format(k.format, f))
+            return r.fail(n["format"], "capture.format",
+                          "unknown format '" + k.format + "' (expected yuyv, uyvy or nv12)");
+        if (!v4l2::info(f).supported) return r.fail(n["format"], "capture.format", std::string(v4l2::info(f).why));
+        v4l2::DvTimingsName dv;
+        if (!k.dv_timings.empty() && k.dv_timings != "query" && !v4l2::parse_dv_timings_name(k.dv_timings, dv))
+            return r.fail(n["dv_timings"], "capture.dv_timings",
+                          "expected query or timings like 1920x1080p60, got '" + k.dv_timings + "'");
+        if (k.device.empty()) return r.fail(n, "capture.device", "must name the video device");
+    }
+    if (const YAML::Node n = root["button"]) {
+        auto& b = c.button;
+        b.present = true;
+        if (!r.keys(n, "button", {"chip", "line", "active_low", "debounce_ms", "long_press_ms"}) ||
+            !r.text(n, "chip", "button.chip", b.chip) || !r.integer(n, "line", "button.line", 0, 511, b.line) ||
+            !r.boolean(n, "active_low", "button.active_low", b.active_low) ||
+            !r.number(n, "debounce_ms", "button.debounce_ms", 0, 1000, b.debounce_ms) ||
+            !r.number(n, "long_press_ms", "button.long_press_ms", 0, 60000, b.long_press_ms))
+            return false;
+        if (b.chip.empty()) return r.fail(n, "button.chip", "missing (gpiochip name, label or number)");
+    }
+    if (const YAML::Node n = root["handle"]) {
+        auto& h = c.handle;
+        h.present = true;
+        if (!r.keys(n, "handle", {"vid", "pid", "serial", "usage_page"}) || !r.id16(n, "vid", "handle.vid", h.vid) ||
+            !r.id16(n, "pid", "handle.pid", h.pid) || !r.text(n, "serial", "handle.serial", h.serial) ||
+            !r.id16(n, "usage_page", "handle.usage_page", h.usage_page))
+            return false;
+        if (!n["vid"] || !n["pid"]) return r.fail(n, "handle", "vid and pid are required");
+    }
+    return true;
+}
+
 }  // namespace
 
 bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
@@ -144,7 +197,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         error = path + ": board file is empty";
         return false;
     }
-    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "display", "paths", "capture", "hid", "gpio"}))
+    if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "capture", "button", "handle",
+                           "display", "paths"}))
         return false;
     if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
@@ -193,45 +247,6 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             return r.fail(d["mode"], "display.mode", "expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '" + mode + "'");
         if (c.display_card.empty()) return r.fail(d["card"], "display.card", "must name a device, e.g. /dev/dri/card0");
     }
-    if (const YAML::Node v = root["capture"]) {
-        c.has_capture = true;
-        if (!r.keys(v, "capture", {"device", "format", "width", "height", "fps", "buffers", "input", "dv_timings"}) ||
-            !r.text(v, "device", "capture.device", c.capture_device) ||
-            !r.text(v, "format", "capture.format", c.capture_format) ||
-            !r.integer(v, "width", "capture.width", 16, 8192, c.capture_width) ||
-            !r.integer(v, "height", "capture.height", 16, 8192, c.capture_height) ||
-            !r.number(v, "fps", "capture.fps", 0, 500, c.capture_fps) ||
-            !r.integer(v, "buffers", "capture.buffers", 2, 32, c.capture_buffers) ||
-            !r.integer(v, "input", "capture.input", -1, 255, c.capture_input) ||
-            !r.text(v, "dv_timings", "capture.dv_timings", c.capture_dv_timings))
-            return false;
-        v4l2::CaptureFormat f{};
-        if (!v4l2::parse_capture_format(c.capture_format, f))
-            return r.fail(v["format"], "capture.format", "unknown format '" + c.capture_format + "' (expected yuyv, uyvy, nv12 or mjpeg)");
-        v4l2::DvTimingsName dv;
-        if (!c.capture_dv_timings.empty() && c.capture_dv_timings != "query" &&
-            !v4l2::parse_dv_timings_name(c.capture_dv_timings, dv))
-            return r.fail(v["dv_timings"], "capture.dv_timings",
-                          "expected 'query' or WIDTHxHEIGHTpRATE (e.g. 1920x1080p60), got '" + c.capture_dv_timings + "'");
-    }
-    if (const YAML::Node h = root["hid"]) {
-        c.has_hid = true;
-        if (!r.keys(h, "hid", {"vid", "pid", "serial", "usage_page"}) || !r.id(h, "vid", "hid.vid", 0xffff, c.hid_vid) ||
-            !r.id(h, "pid", "hid.pid", 0xffff, c.hid_pid) || !r.text(h, "serial", "hid.serial", c.hid_serial) ||
-            !r.id(h, "usage_page", "hid.usage_page", 0xffff, c.hid_usage_page))
-            return false;
-        if (!h["vid"] || !h["pid"]) return r.fail(h, "hid", "needs vid and pid (the handle's USB ids)");
-    }
-    if (const YAML::Node g = root["gpio"]) {
-        c.has_gpio = true;
-        if (!r.keys(g, "gpio", {"chip", "line", "active_low", "debounce_ms", "long_press_ms"}) ||
-            !r.text(g, "chip", "gpio.chip", c.gpio_chip) || !r.integer(g, "line", "gpio.line", 0, 1023, c.gpio_line) ||
-            !r.boolean(g, "active_low", "gpio.active_low", c.gpio_active_low) ||
-            !r.number(g, "debounce_ms", "gpio.debounce_ms", 0, 1000, c.gpio_debounce_ms) ||
-            !r.number(g, "long_press_ms", "gpio.long_press_ms", 0, 60000, c.gpio_long_press_ms))
-            return false;
-        if (c.gpio_chip.empty()) return r.fail(g, "gpio.chip", "missing (the gpiochip name, label or /dev path)");
-    }
     if (const YAML::Node p = root["paths"]) {
         if (!r.keys(p, "paths", {"calibration", "gesture_model", "storage"}) ||
             !r.text(p, "calibration", "paths.calibration", c.calibration) ||
@@ -239,6 +254,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             !r.text(p, "storage", "paths.storage", c.storage))
             return false;
     }
+    if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
     for (std::string* p : {&c.calibration, &c.gesture_model, &c.storage}) *p = resolve(base, *p);
     for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace})

@@ -33,23 +33,6 @@ struct BoardConfig {
     bool display_zero_copy = true, display_atomic = true;
     double latency_budget_ms = 0.0;  // video.latency_budget_ms: capture -> flip limit; 0 = period + 2 ms
 
-    // capture (drivers/v4l2): capture.device, .format, .width, .height, .fps, .buffers,
-    // .input, .dv_timings (see v4l2_capture.hpp)
-    bool has_capture = false;
-    std::string capture_device = "/dev/video0", capture_format = "yuyv", capture_dv_timings;
-    int capture_width = 1920, capture_height = 1080, capture_buffers = 4, capture_input = -1;
-    double capture_fps = 0.0;
-    // hid (drivers/hid): hid.vid, .pid (hex "0x1209" or decimal), .serial, .usage_page
-    bool has_hid = false;
-    int hid_vid = 0, hid_pid = 0, hid_usage_page = 0;
-    std::string hid_serial;
-    // gpio (drivers/gpio): gpio.chip, .line, .active_low, .debounce_ms, .long_press_ms
-    bool has_gpio = false;
-    std::string gpio_chip;
-    int gpio_line = 0;
-    bool gpio_active_low = false;
-    double gpio_debounce_ms = 20.0, gpio_long_press_ms = 800.0;
-
     // paths: calibration, gesture_model (files checked by selftest), storage (a writable directory)
     std::string calibration, gesture_model, storage;
 
@@ -57,6 +40,34 @@ struct BoardConfig {
     std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;
     bool sim_realtime = false;
     double sim_fps = 0.0;  // 0 = the recording's own rate
+
+    // capture: (V4L2; drivers/v4l2). Absent: present = false.
+    struct Capture {
+        bool present = false;
+        std::string device = "/dev/video0";
+        std::string format = "yuyv";  // yuyv | uyvy | nv12 (mjpeg is refused)
+        int width = 1920, height = 1080;
+        double fps = 0.0;             // 0 = the device's (or the DV timings') rate
+        int buffers = 4;
+        int input = -1;               // VIDIOC_S_INPUT; -1 = leave
+        std::string dv_timings;       // "" | "query" | "1920x1080p60"
+    } capture;
+    // button: (GPIO through libgpiod; drivers/gpio)
+    struct Button {
+        bool present = false;
+        std::string chip;             // gpiochip name, label, path or number
+        int line = 0;
+        bool active_low = false;
+        double debounce_ms = 20.0;
+        double long_press_ms = 800.0;  // 0 = no long press
+    } button;
+    // handle: (USB HID through hidapi; drivers/hid, drivers/usb)
+    struct Handle {
+        bool present = false;
+        int vid = 0, pid = 0;         // 0x0000..0xffff, hex or decimal in the file
+        std::string serial;           // "" = any
+        int usage_page = 0;           // 0 = any
+    } handle;
 };
 
 bool load_board(const std::string& path, BoardConfig& out, std::string& error);

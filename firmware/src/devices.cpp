@@ -6,14 +6,14 @@ namespace endotower::firmware {
 
 v4l2::V4l2CaptureConfig capture_config(const BoardConfig& b) {
     v4l2::V4l2CaptureConfig c;
-    c.device = b.capture_device;
-    v4l2::parse_capture_format(b.capture_format, c.format);  // validated by load_board
-    c.width = b.capture_width;
-    c.height = b.capture_height;
-    c.fps = b.capture_fps;
-    c.buffers = b.capture_buffers;
-    c.input = b.capture_input;
-    c.dv_timings = b.capture_dv_timings;
+    c.device = b.capture.device;
+    v4l2::parse_capture_format(b.capture.format, c.format);  // validated by load_board
+    c.width = b.capture.width;
+    c.height = b.capture.height;
+    c.fps = b.capture.fps;
+    c.buffers = b.capture.buffers;
+    c.input = b.capture.input;
+    c.dv_timings = b.capture.dv_timings;
     return c;
 }
 
@@ -31,10 +31,20 @@ display::KmsSinkConfig display_config(const BoardConfig& b) {
 
 hid::HidHandleConfig handle_config(const BoardConfig& b) {
     hid::HidHandleConfig c;
-    c.vid = static_cast<std::uint16_t>(b.hid_vid);
-    c.pid = static_cast<std::uint16_t>(b.hid_pid);
-    c.serial = b.hid_serial;
-    c.usage_page = static_cast<std::uint16_t>(b.hid_usage_page);
+    c.vid = static_cast<std::uint16_t>(b.handle.vid);
+    c.pid = static_cast<std::uint16_t>(b.handle.pid);
+    c.serial = b.handle.serial;
+    c.usage_page = static_cast<std::uint16_t>(b.handle.usage_page);
+    return c;
+}
+
+gpio::GpioButtonConfig button_config(const BoardConfig& b) {
+    gpio::GpioButtonConfig c;
+    c.chip = b.button.chip;
+    c.line = static_cast<unsigned>(b.button.line);
+    c.active_low = b.button.active_low;
+    c.debounce.debounce_ns = static_cast<hal::Nanos>(b.button.debounce_ms * 1e6);
+    c.debounce.long_press_ns = static_cast<hal::Nanos>(b.button.long_press_ms * 1e6);
     return c;
 }
 

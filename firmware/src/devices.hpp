@@ -6,6 +6,7 @@
 
 #include "board_config.hpp"
 #include "endotower/display/kms_sink.hpp"
+#include "endotower/gpio/gpio_button.hpp"
 #include "endotower/hid/hid_handle.hpp"
 #include "endotower/v4l2/v4l2_capture.hpp"
 
@@ -14,6 +15,7 @@ namespace endotower::firmware {
 v4l2::V4l2CaptureConfig capture_config(const BoardConfig& b);
 display::KmsSinkConfig display_config(const BoardConfig& b);
 hid::HidHandleConfig handle_config(const BoardConfig& b);
+gpio::GpioButtonConfig button_config(const BoardConfig& b);
 
 // What to do about a device error, from its errno text; "" when there is no advice.
 // `board` is the board file (for "edit BOARD: capture.device").

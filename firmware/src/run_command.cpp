@@ -17,6 +17,7 @@
 #include "endotower/app/trace_writer.hpp"
 #include "endotower/hal/control_merge.hpp"
 #include "endotower/system/monotonic_clock.hpp"
+#include "endotower/usb/usb_hotplug.hpp"
 #include "endotower/system/syscall.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
@@ -80,7 +81,7 @@ int run_run_command(const Args& args) {
         std::fprintf(stderr, "endotower run: %s\n", error.c_str());
         return kExitBadInput;
     }
-    if (!board.has_capture) return run_usage(board_path + ": no 'capture:' section: which device is the camera?");
+    if (!board.capture.present) return run_usage(board_path + ": no 'capture:' section: which device is the camera?");
 
     system::MonotonicClock clock;
     // Probe the camera before anything else: a wrong path, a permission or a format
@@ -97,12 +98,12 @@ int run_run_command(const Args& args) {
         print_device_error("run", sink.error(), board_path);
         return kExitBadInput;
     }
-    std::printf("endotower run: %s on %s %s (%s commits)\n", board.capture_device.c_str(),
+    std::printf("endotower run: %s on %s %s (%s commits)\n", board.capture.device.c_str(),
                 sink.connector_name().c_str(), sink.mode_name().c_str(), sink.atomic() ? "atomic" : "legacy");
 
     hal::ControlMerge inputs;
     std::unique_ptr<hid::HidHandle> handle;
-    if (board.has_hid) {
+    if (board.handle.present) {
         handle = std::make_unique<hid::HidHandle>(handle_config(board));
         if (!handle->start(error)) {
             print_device_error("run", error, board_path);
@@ -110,6 +111,28 @@ int run_run_command(const Args& args) {
         }
         if (!handle->connected()) std::fprintf(stderr, "endotower run: handle not connected yet: %s\n", handle->last_error().c_str());
         inputs.attach(handle.get());
+    }
+    // USB arrivals reopen the handle at once; without libusb hotplug the handle still
+    // finds its /dev/hidraw node again by itself.
+    std::unique_ptr<usb::UsbHotplug> hotplug;
+    if (handle) {
+        hotplug = std::make_unique<usb::UsbHotplug>(static_cast<std::uint16_t>(board.handle.vid),
+                                                    static_cast<std::uint16_t>(board.handle.pid));
+        hid::HidHandle* h = handle.get();
+        if (!hotplug->start([h](bool arrived) { if (arrived) h->notify_arrival(); }, error)) {
+            std::fprintf(stderr, "endotower run: USB hotplug unavailable (%s); the handle reconnects through /dev/hidraw\n",
+                         error.c_str());
+            hotplug.reset();
+        }
+    }
+    std::unique_ptr<gpio::GpioButton> button;
+    if (board.button.present) {
+        button = std::make_unique<gpio::GpioButton>(button_config(board));
+        if (!button->start(error)) {
+            print_device_error("run", error, board_path);
+            return kExitBadInput;
+        }
+        inputs.attach(button.get());
     }
 
     app::TraceWriter trace;

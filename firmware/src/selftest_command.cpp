@@ -216,7 +216,7 @@ int run_selftest_command(const Args& args) {
     hal::ControlMerge merge;
     std::unique_ptr<hid::HidHandle> handle;
     std::unique_ptr<WatchedInput> handle_watch;
-    if (board.has_hid) {
+    if (board.handle.present) {
         handle = std::make_unique<hid::HidHandle>(handle_config(board));
         if (!handle->start(error)) {
             add({"handle present", R::kFail, fail_fix(error)});
@@ -226,7 +226,7 @@ int run_selftest_command(const Args& args) {
             for (int i = 0; i < 40 && !handle->connected(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
             if (handle->connected()) {
                 char ids[32];
-                std::snprintf(ids, sizeof ids, "HID %04x:%04x", board.hid_vid, board.hid_pid);
+                std::snprintf(ids, sizeof ids, "HID %04x:%04x", board.handle.vid, board.handle.pid);
                 add({"handle present", R::kPass, ids});
                 handle_watch = std::make_unique<WatchedInput>(*handle);
                 merge.attach(handle_watch.get());
@@ -236,19 +236,33 @@ int run_selftest_command(const Args& args) {
         }
     }
 
+    std::unique_ptr<gpio::GpioButton> button;
+    std::unique_ptr<WatchedInput> button_watch;
+    if (board.button.present) {
+        button = std::make_unique<gpio::GpioButton>(button_config(board));
+        if (!button->start(error)) {
+            add({"gpio button present", R::kFail, fail_fix(error)});
+            button.reset();
+        } else {
+            add({"gpio button present", R::kPass, board.button.chip + " line " + std::to_string(board.button.line)});
+            button_watch = std::make_unique<WatchedInput>(*button);
+            merge.attach(button_watch.get());
+        }
+    }
+
     // Camera.
     bool camera_ok = false;
     hal::FrameFormat cam_format{};
     hal::Nanos period = 0;
     std::unique_ptr<v4l2::V4l2Capture> capture;
-    if (!board.has_capture) {
+    if (!board.capture.present) {
         add({"camera present", R::kSkip, "no capture: section in the board file"});
     } else {
         capture = std::make_unique<v4l2::V4l2Capture>(capture_config(board));
         if (!capture->start()) {
             add({"camera present", R::kFail, fail_fix(capture->error())});
         } else {
-            add({"camera present", R::kPass, board.capture_device});
+            add({"camera present", R::kPass, board.capture.device});
             hal::Frame f;
             hal::SourceStatus st = hal::SourceStatus::kTimeout;
             for (int i = 0; i < 3 && st != hal::SourceStatus::kFrame && st != hal::SourceStatus::kError; ++i) {
@@ -262,12 +276,12 @@ int run_selftest_command(const Args& args) {
                  st == hal::SourceStatus::kFrame ? "frames arriving"
                                                  : "no frame in 3 s; fix: check the video source is on and its cable"});
             const bool fmt_ok = cam_format.pixel_format == v4l2::info(capture_config(board).format).pixel &&
-                                (!board.capture_dv_timings.empty() ||
-                                 (cam_format.width == board.capture_width && cam_format.height == board.capture_height));
+                                (!board.capture.dv_timings.empty() ||
+                                 (cam_format.width == board.capture.width && cam_format.height == board.capture.height));
             add({"camera format", fmt_ok ? R::kPass : R::kFail,
                  std::to_string(cam_format.width) + "x" + std::to_string(cam_format.height) + " " +
                      std::string(hal::to_string(cam_format.pixel_format)) + fmt(", %.2f Hz nominal", period > 0 ? 1e9 / static_cast<double>(period) : 0) +
-                     (fmt_ok ? "" : "; board file asks for " + board.capture_format)});
+                     (fmt_ok ? "" : "; board file asks for " + board.capture.format)});
             camera_ok = st == hal::SourceStatus::kFrame;
             capture->stop();
         }
@@ -284,6 +298,7 @@ int run_selftest_command(const Args& args) {
         wanted.push_back({1, handle_watch.get(), "handle button", false});
         wanted.push_back({2, handle_watch.get(), "handle wheel", true});
     }
+    if (button_watch) wanted.push_back({3, button_watch.get(), "gpio button", false});
     auto seen = [](const Prompt& p) {
         return p.wheel ? p.input->wheel.load() != 0 : p.input->pressed.load() && p.input->released.load();
     };

@@ -67,6 +67,7 @@ std::string_view to_string(ControlEvent::Kind k) {
         case ControlEvent::Kind::kButtonPress: return "press";
         case ControlEvent::Kind::kButtonRelease: return "release";
         case ControlEvent::Kind::kWheel: return "wheel";
+        case ControlEvent::Kind::kLongPress: return "long_press";
     }
     return "unknown";
 }

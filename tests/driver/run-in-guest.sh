@@ -5,13 +5,15 @@
 # a tmpfs overlay, so the build tree and the host's libraries run unchanged.
 #
 # Usage: run-in-guest.sh [--modules "vivid uhid gpio-sim vkms"] [--share DIR]...
-#                        [--cache DIR] [--timeout SEC] [--mem 2G] -- COMMAND [ARG]...
+#                        [--cache DIR] [--timeout SEC] [--mem 2G] [--qemu-arg ARG]...
+#                        -- COMMAND [ARG]...
 #   --modules  modules to modprobe before COMMAND; NAME:OPT=V:OPT2=V passes options
 #              (e.g. "vivid:n_devs=1"). Default: none.
 #   --share    a host directory mounted writable at the same path in the guest
 #              (for files the command leaves for the host). Repeatable.
 #   --cache    where setup.sh keeps the prepared guest (default: build/vhw).
 #   --timeout  wall-clock limit for the whole guest run (default 600 s).
+#   --qemu-arg one more qemu argument (e.g. "-device" "qemu-xhci"). Repeatable.
 # COMMAND runs in the current directory, with PATH, HOME, LANG and every GTEST_*,
 # ENDOTOWER_* and ASAN/UBSAN/TSAN_OPTIONS variable of the caller; its stdout and
 # stderr come back on this script's stdout and stderr after the guest stops.
@@ -25,6 +27,7 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 repo=$(cd "$here/../.." && pwd)
 modules=""
 shares=()
+qemu_args=()
 cache=$repo/build/vhw
 timeout_s=600
 mem=2G
@@ -37,6 +40,7 @@ while [ $# -gt 0 ]; do
         --cache) [ $# -ge 2 ] || usage; cache=$2; shift 2 ;;
         --timeout) [ $# -ge 2 ] || usage; timeout_s=$2; shift 2 ;;
         --mem) [ $# -ge 2 ] || usage; mem=$2; shift 2 ;;
+        --qemu-arg) [ $# -ge 2 ] || usage; qemu_args+=("$2"); shift 2 ;;
         --) shift; break ;;
         *) say "unknown option '$1'"; usage ;;
     esac
@@ -82,7 +86,6 @@ done
     echo "R=$(printf %q "$results")"
     cat <<'STAGE2'
 finish() { echo "$1" >"$R/rc.tmp" && mv "$R/rc.tmp" "$R/rc"; sync; /bin/busybox poweroff -f; sleep 5; }
-mount -t configfs configfs /sys/kernel/config 2>/dev/null
 mount -t debugfs debugfs /sys/kernel/debug 2>/dev/null
 mkdir -p /dev/pts /dev/shm && mount -t devpts devpts /dev/pts && mount -t tmpfs tmpfs /dev/shm
 STAGE2
@@ -91,6 +94,8 @@ STAGE2
         # NAME:OPT=V:OPT2=V -> modprobe NAME OPT=V OPT2=V
         echo "modprobe $(printf '%q ' ${m//:/ }) >>\"\$R/stderr\" 2>&1 || { echo \"run-in-guest: modprobe ${m%%:*} failed\" >>\"\$R/stderr\"; finish 125; }"
     done
+    # configfs is a module in Debian's kernel (gpio-sim is configured through it).
+    echo 'modprobe -q configfs; mount -t configfs configfs /sys/kernel/config 2>/dev/null'
     echo "cd $(printf %q "$PWD") || { echo 'run-in-guest: cannot cd to $(printf %q "$PWD")' >>\"\$R/stderr\"; finish 125; }"
     echo "$(printf '%q ' "$@") >\"\$R/stdout\" 2>>\"\$R/stderr\" </dev/null"
     echo 'finish $?'
@@ -101,7 +106,7 @@ timeout --foreground -k 5 "$timeout_s" "$qemu" -machine q35 -accel tcg,thread=mu
     -nographic -no-reboot -nic none -monitor none \
     -kernel "$guest/vmlinux" -initrd "$guest/initramfs.cpio" \
     -append "console=ttyS0 rdinit=/init panic=-1 quiet loglevel=4 mitigations=off" \
-    "${virtfs[@]}" </dev/null >"$console" 2>&1
+    "${virtfs[@]}" "${qemu_args[@]}" </dev/null >"$console" 2>&1
 qrc=$?
 t1=$(date +%s.%N)
 [ -f "$results/stdout" ] && cat "$results/stdout"

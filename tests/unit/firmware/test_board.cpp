@@ -81,37 +81,6 @@ TEST(Board, DisplayAndPaths) {
     EXPECT_TRUE(d.display_zero_copy);
 }
 
-TEST(Board, CaptureHandleAndButton) {
-    const std::string p = write_board("devices.yaml",
-                                      "board: t\n"
-                                      "capture: {device: /dev/video3, format: uyvy, width: 1280, height: 720,\n"
-                                      "          fps: 50, buffers: 5, input: 3, dv_timings: 1280x720p50}\n"
-                                      "hid: {vid: 0x1209, pid: 59248, serial: A1, usage_page: 0x0c}\n"
-                                      "gpio: {chip: gpiochip2, line: 17, active_low: true, debounce_ms: 15}\n");
-    BoardConfig b;
-    std::string err;
-    ASSERT_TRUE(load_board(p, b, err)) << err;
-    EXPECT_TRUE(b.has_capture);
-    EXPECT_EQ(b.capture_device, "/dev/video3");
-    EXPECT_EQ(b.capture_format, "uyvy");
-    EXPECT_EQ(b.capture_width, 1280);
-    EXPECT_EQ(b.capture_buffers, 5);
-    EXPECT_EQ(b.capture_input, 3);
-    EXPECT_EQ(b.capture_dv_timings, "1280x720p50");
-    EXPECT_DOUBLE_EQ(b.capture_fps, 50);
-    EXPECT_TRUE(b.has_hid);
-    EXPECT_EQ(b.hid_vid, 0x1209);
-    EXPECT_EQ(b.hid_pid, 0xe770);
-    EXPECT_EQ(b.hid_serial, "A1");
-    EXPECT_EQ(b.hid_usage_page, 0x0c);
-    EXPECT_TRUE(b.has_gpio);
-    EXPECT_EQ(b.gpio_chip, "gpiochip2");
-    EXPECT_EQ(b.gpio_line, 17);
-    EXPECT_TRUE(b.gpio_active_low);
-    EXPECT_DOUBLE_EQ(b.gpio_debounce_ms, 15);
-    EXPECT_DOUBLE_EQ(b.gpio_long_press_ms, 800);
-}
-
 // Every shipped board loads.
 TEST(Board, ShippedBoardsLoad) {
     for (const char* name : {"sim", "vhw", "rpi5", "rk3588"}) {
@@ -136,14 +105,6 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\ndisplay:\n  conector: HDMI-A-1\n",
          "3: field 'display.conector': unknown key (expected one of: card, connector, mode, zero_copy, atomic)"},
         {"board: t\npaths:\n  storage: [a]\n", "3: field 'paths.storage': expected a string"},
-        {"board: t\ncapture:\n  format: rgb3\n",
-         "3: field 'capture.format': unknown format 'rgb3' (expected yuyv, uyvy, nv12 or mjpeg)"},
-        {"board: t\ncapture:\n  dv_timings: 1080p\n",
-         "3: field 'capture.dv_timings': expected 'query' or WIDTHxHEIGHTpRATE (e.g. 1920x1080p60), got '1080p'"},
-        {"board: t\nhid:\n  vid: 0x12345\n  pid: 1\n",
-         "3: field 'hid.vid': expected a number from 0 to 65535 (0x... for hex), got '0x12345'"},
-        {"board: t\nhid:\n  vid: 0x1209\n", "3: field 'hid': needs vid and pid (the handle's USB ids)"},
-        {"board: t\ngpio:\n  line: 3\n", "3: field 'gpio.chip': missing (the gpiochip name, label or /dev path)"},
         {"board: t\nvideo:\n  latency_ms: fast\n",
          "3: field 'video.latency_ms': expected a number, got 'fast'"},
         {"board: t\nvideo:\n  latency_ms: -1\n", "3: field 'video.latency_ms': must be between 0 and 1000, got -1"},
@@ -191,6 +152,93 @@ TEST(Board, MissingAndEmptyFiles) {
     const std::string p = write_board("empty.yaml", "");
     EXPECT_FALSE(load_board(p, b, err));
     EXPECT_EQ(err, p + ": board file is empty");
+}
+
+}  // namespace
+}  // namespace endotower::firmware
+
+namespace endotower::firmware {
+namespace {
+
+std::string write_input_board(const std::string& text) {
+    const auto dir = std::filesystem::temp_directory_path() / "endotower_board_test";
+    std::filesystem::create_directories(dir);
+    const auto p = dir / "input.yaml";
+    std::ofstream(p) << text;
+    return p.string();
+}
+
+TEST(BoardInput, CaptureButtonHandleValuesAndDefaults) {
+    const std::string p = write_input_board(
+        "board: t\n"
+        "capture: {device: /dev/v4l/by-id/hdmi, format: uyvy, width: 1280, height: 720, fps: 50,\n"
+        "          buffers: 3, input: 3, dv_timings: 1280x720p50}\n"
+        "button: {chip: endotower-button, line: 17, active_low: true, debounce_ms: 30}\n"
+        "handle: {vid: 0x1209, pid: 59248, serial: A1, usage_page: 0x01}\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_TRUE(b.capture.present);
+    EXPECT_EQ(b.capture.device, "/dev/v4l/by-id/hdmi");
+    EXPECT_EQ(b.capture.format, "uyvy");
+    EXPECT_EQ(b.capture.width, 1280);
+    EXPECT_EQ(b.capture.height, 720);
+    EXPECT_DOUBLE_EQ(b.capture.fps, 50);
+    EXPECT_EQ(b.capture.buffers, 3);
+    EXPECT_EQ(b.capture.input, 3);
+    EXPECT_EQ(b.capture.dv_timings, "1280x720p50");
+    EXPECT_TRUE(b.button.present);
+    EXPECT_EQ(b.button.chip, "endotower-button");
+    EXPECT_EQ(b.button.line, 17);
+    EXPECT_TRUE(b.button.active_low);
+    EXPECT_DOUBLE_EQ(b.button.debounce_ms, 30);
+    EXPECT_DOUBLE_EQ(b.button.long_press_ms, 800);  // default
+    EXPECT_EQ(b.handle.vid, 0x1209);
+    EXPECT_EQ(b.handle.pid, 59248);
+    EXPECT_EQ(b.handle.serial, "A1");
+    EXPECT_EQ(b.handle.usage_page, 1);
+
+    const std::string q = write_input_board("board: t\ncapture: {}\n");
+    BoardConfig d;
+    ASSERT_TRUE(load_board(q, d, err)) << err;
+    EXPECT_TRUE(d.capture.present);
+    EXPECT_EQ(d.capture.device, "/dev/video0");
+    EXPECT_EQ(d.capture.format, "yuyv");
+    EXPECT_EQ(d.capture.buffers, 4);
+    EXPECT_EQ(d.button.debounce_ms, 20);
+    EXPECT_FALSE(d.button.present);
+    EXPECT_FALSE(d.handle.present);
+}
+
+TEST(BoardInput, ErrorsNameTheLineAndField) {
+    const std::pair<const char*, const char*> cases[] = {
+        {"board: t\ncapture:\n  format: rgb\n",
+         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy or nv12)"},
+        {"board: t\ncapture:\n  format: mjpeg\n",
+         "3: field 'capture.format': MJPEG is not supported: decoding it would allocate per frame "
+         "(libjpeg image pools); set capture.format to yuyv, uyvy or nv12"},
+        {"board: t\ncapture:\n  dv_timings: 1080p\n",
+         "3: field 'capture.dv_timings': expected query or timings like 1920x1080p60, got '1080p'"},
+        {"board: t\ncapture:\n  buffers: 1\n", "3: field 'capture.buffers': must be between 2 and 16, got 1"},
+        {"board: t\ncapture:\n  fmt: yuyv\n",
+         "3: field 'capture.fmt': unknown key (expected one of: device, format, width, height, fps, buffers, "
+         "input, dv_timings)"},
+        {"board: t\nbutton:\n  line: 3\n", "3: field 'button.chip': missing (gpiochip name, label or number)"},
+        {"board: t\nbutton:\n  chip: c\n  debounce_ms: -5\n",
+         "4: field 'button.debounce_ms': must be between 0 and 1000, got -5"},
+        {"board: t\nhandle:\n  vid: 0x1209\n  pid: 0x10000\n",
+         "4: field 'handle.pid': expected a 16-bit id like 0x1209, got '0x10000'"},
+        {"board: t\nhandle:\n  vid: acme\n  pid: 1\n",
+         "3: field 'handle.vid': expected a 16-bit id like 0x1209, got 'acme'"},
+        {"board: t\nhandle:\n  vid: 0x1209\n", "3: field 'handle': vid and pid are required"},
+    };
+    for (const auto& [text, message] : cases) {
+        const std::string p = write_input_board(text);
+        BoardConfig b;
+        std::string err;
+        EXPECT_FALSE(load_board(p, b, err)) << text;
+        EXPECT_EQ(err, p + ":" + message) << text;
+    }
 }
 
 }  // namespace

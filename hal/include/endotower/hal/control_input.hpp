@@ -10,7 +10,9 @@
 namespace endotower::hal {
 
 struct ControlEvent {
-    enum class Kind : std::uint8_t { kButtonPress, kButtonRelease, kWheel };
+    // kLongPress: the button has been held for the long-press time; sent once while
+    // it is still down (its release follows as usual).
+    enum class Kind : std::uint8_t { kButtonPress, kButtonRelease, kWheel, kLongPress };
     Kind kind = Kind::kButtonPress;
     std::uint8_t button = 0;  // which button, 0 = the handle's main button
     std::int16_t delta = 0;   // wheel detents, positive = away from the surgeon
