@@ -8,8 +8,8 @@ namespace endotower::app {
 
 TestPatternStage::TestPatternStage(std::vector<std::string> prompts) : prompts_(std::move(prompts)) {}
 
-hal::Rect TestPatternStage::bars_rect(int w, int h) { return {0, h - h / 6, w, h / 6}; }
-hal::Rect TestPatternStage::banner_rect(int w, int h) { return {w / 10, h / 12, w - w / 5, h / 8}; }
+hal::Rect TestPatternStage::bars_rect(int w, int h) { return {0, h - h / 12, w, h / 12}; }
+hal::Rect TestPatternStage::banner_rect(int w, int h) { return {w / 8, h / 16, w - w / 4, h / 10}; }
 
 void TestPatternStage::configure(const hal::FrameFormat& format) {
     width_ = format.width;

@@ -144,7 +144,7 @@ bool load_input_devices(Reader& r, const YAML::Node& root, BoardConfig& c) {
         v4l2::CaptureFormat f{};
         if (!v4l2::parse_capture_format(k.format, f))
             return r.fail(n["format"], "capture.format",
-                          "unknown format '" + k.format + "' (expected yuyv, uyvy or nv12)");
+                          "unknown format '" + k.format + "' (expected yuyv, uyvy, nv12 or bgrx)");
         if (!v4l2::info(f).supported) return r.fail(n["format"], "capture.format", std::string(v4l2::info(f).why));
         v4l2::DvTimingsName dv;
         if (!k.dv_timings.empty() && k.dv_timings != "query" && !v4l2::parse_dv_timings_name(k.dv_timings, dv))
@@ -205,7 +205,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         return false;
     if (const YAML::Node v = root["video"]) {
         if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms", "late_tolerance_ms", "latency_budget_ms"}) ||
-            !r.number(v, "latency_budget_ms", "video.latency_budget_ms", 0, 1000, c.latency_budget_ms) ||
+            !r.number(v, "latency_budget_ms", "video.latency_budget_ms", 0, 10000, c.latency_budget_ms) ||
             !r.number(v, "late_tolerance_ms", "video.late_tolerance_ms", 0, 1000, c.late_tolerance_ms) ||
             !r.number(v, "latency_ms", "video.latency_ms", 0, 1000, c.latency_ms) ||
             !r.number(v, "compose_budget_ms", "video.compose_budget_ms", 0, 1000, c.compose_budget_ms))

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <thread>
 
+#include <sys/resource.h>
+
 #include "board_config.hpp"
 #include "commands.hpp"
 #include "devices.hpp"
@@ -100,6 +102,7 @@ int run_run_command(const Args& args) {
     }
     std::printf("endotower run: %s on %s %s (%s commits)\n", board.capture.device.c_str(),
                 sink.connector_name().c_str(), sink.mode_name().c_str(), sink.atomic() ? "atomic" : "legacy");
+    std::fflush(stdout);
 
     hal::ControlMerge inputs;
     std::unique_ptr<hid::HidHandle> handle;
@@ -174,7 +177,14 @@ int run_run_command(const Args& args) {
                 std::this_thread::sleep_for(std::chrono::milliseconds(20));
             pipeline.request_stop();
         });
+    auto cpu_ns = [] {
+        rusage u{};
+        getrusage(RUSAGE_SELF, &u);
+        return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * hal::kSecond + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1000;
+    };
+    const hal::Nanos cpu0 = cpu_ns();
     const app::PipelineSummary s = pipeline.run();
+    const hal::Nanos cpu = cpu_ns() - cpu0;
     done = true;
     if (timer.joinable()) timer.join();
     g_pipeline = nullptr;
@@ -183,10 +193,12 @@ int run_run_command(const Args& args) {
     auto ms = [](hal::Nanos v) { return static_cast<double>(v) / 1e6; };
     const v4l2::CaptureStats& cs = capture.stats();
     const display::KmsSinkStats& ds = sink.stats();
-    std::printf("endotower run: %lld frames in, %lld out, %lld late; capture: %llu dropped by the driver, %llu reopens\n",
+    std::printf("endotower run: %lld frames in, %lld out, %lld late; capture: %llu dropped by the driver, "
+                "%llu superseded, %llu timeouts, %llu format changes, %llu reopens\n",
                 static_cast<long long>(s.frames_in), static_cast<long long>(s.frames_out),
                 static_cast<long long>(s.late_frames), static_cast<unsigned long long>(cs.drops),
-                static_cast<unsigned long long>(cs.reopens));
+                static_cast<unsigned long long>(cs.skipped), static_cast<unsigned long long>(cs.timeouts),
+                static_cast<unsigned long long>(cs.format_changes), static_cast<unsigned long long>(cs.reopens));
     std::printf("latency (capture -> page flip): target %.3f ms; min %.3f, median %.3f, p99 %.3f, max %.3f ms\n",
                 ms(s.latency_target_ns), ms(s.latency_min_ns), ms(s.latency_median_ns), ms(s.latency_p99_ns),
                 ms(s.latency_max_ns));
@@ -194,6 +206,11 @@ int run_run_command(const Args& args) {
                 static_cast<long long>(ds.zero_copy_frames), static_cast<long long>(ds.copied_frames),
                 ds.copied_frames > 0 ? ms(ds.copy_ns_total) / static_cast<double>(ds.copied_frames) : 0.0,
                 ms(ds.copy_ns_max), static_cast<long long>(ds.dropped_frames));
+    std::printf("cpu: %.3f ms per frame shown (user + system, every thread)\n",
+                s.frames_out > 0 ? ms(cpu) / static_cast<double>(s.frames_out) : 0.0);
+    std::printf("overlay: %lld frames drawn with GLES2 (mean %.3f ms, max %.3f ms)\n", static_cast<long long>(ds.overlay_frames),
+                ds.overlay_frames > 0 ? ms(ds.overlay_ns_total) / static_cast<double>(ds.overlay_frames) : 0.0,
+                ms(ds.overlay_ns_max));
     if (!s.ok) {
         std::fprintf(stderr, "endotower run: %s\n", s.error.c_str());
         return kExitFailure;

@@ -110,12 +110,33 @@ bool GlesOverlay::init(int width, int height, bool flip_y) {
     return true;
 }
 
-bool GlesOverlay::draw(const hal::OverlayLayer* layer) {
-    glViewport(0, 0, width_, height_);
-    glDisable(GL_SCISSOR_TEST);
-    glDisable(GL_BLEND);
+void GlesOverlay::clear(int buffer_age) {
     glClearColor(0.f, 0.f, 0.f, 0.f);
-    glClear(GL_COLOR_BUFFER_BIT);
+    if (buffer_age < 1 || buffer_age > history_size_) {
+        glDisable(GL_SCISSOR_TEST);
+        glClear(GL_COLOR_BUFFER_BIT);
+        return;
+    }
+    // The buffer still shows the draw of `buffer_age` ago; everything drawn since then
+    // (in other buffers) covers the rects that may be stale here.
+    glEnable(GL_SCISSOR_TEST);
+    for (int k = 0; k < buffer_age; ++k)
+        for (std::size_t i = 0; i < history_[static_cast<std::size_t>(k)].count; ++i) {
+            const hal::Rect& r = history_[static_cast<std::size_t>(k)].rects[i];
+            glScissor(r.x, flip_y_ ? height_ - r.y - r.height : r.y, r.width, r.height);
+            glClear(GL_COLOR_BUFFER_BIT);
+        }
+    glDisable(GL_SCISSOR_TEST);
+}
+
+bool GlesOverlay::draw(const hal::OverlayLayer* layer, int buffer_age) {
+    glViewport(0, 0, width_, height_);
+    glDisable(GL_BLEND);
+    clear(buffer_age);
+    // This draw becomes history_[0].
+    for (int k = kHistory - 1; k > 0; --k) history_[static_cast<std::size_t>(k)] = history_[static_cast<std::size_t>(k - 1)];
+    history_[0].count = 0;
+    history_size_ = std::min(history_size_ + 1, kHistory);
     if (layer == nullptr || layer->empty() || layer->rgba == nullptr)
         return glGetError() == GL_NO_ERROR || fail("clear failed");
 
@@ -131,6 +152,7 @@ bool GlesOverlay::draw(const hal::OverlayLayer* layer) {
         const int x1 = std::min(w, r.x + r.width), y1 = std::min(h, r.y + r.height);
         if (x1 <= x0 || y1 <= y0) continue;
         clipped[n++] = {x0, y0, x1 - x0, y1 - y0};
+        history_[0].rects[history_[0].count++] = clipped[n - 1];
         const std::uint8_t* first = layer->rgba + static_cast<std::ptrdiff_t>(y0) * layer->stride + 4 * x0;
         if (unpack_subimage_ && layer->stride % 4 == 0) {
             glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, layer->stride / 4);

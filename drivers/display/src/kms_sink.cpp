@@ -151,6 +151,7 @@ struct KmsSink::Impl {
     EGLSurface egl_surface = EGL_NO_SURFACE;
     std::unique_ptr<GlesOverlay> overlay;
     gbm_bo* shown_bo = nullptr;  // the overlay buffer on screen
+    bool buffer_age = false;     // EGL_EXT_buffer_age
 
     hal::FrameFormat format;
     std::uint32_t fourcc = 0;
@@ -242,6 +243,8 @@ bool KmsSink::Impl::setup_egl() {
     if (egl_context == EGL_NO_CONTEXT || egl_surface == EGL_NO_SURFACE ||
         !eglMakeCurrent(egl_display, egl_surface, egl_surface, egl_context))
         return fail("EGL: cannot create a GLES2 context on the GBM surface");
+    const char* ext = eglQueryString(egl_display, EGL_EXTENSIONS);
+    buffer_age = ext != nullptr && std::strstr(ext, "EGL_EXT_buffer_age") != nullptr;
     overlay = std::make_unique<GlesOverlay>();
     if (!overlay->init(w, h, true)) return fail(overlay->error());
     return true;
@@ -524,7 +527,10 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
     gbm_bo* bo = nullptr;
     std::uint32_t ofb = 0;
     if (layer != nullptr && !layer->empty()) {
-        if (!m.overlay->draw(layer)) {
+        const hal::Nanos t0 = mono_now();
+        EGLint age = 0;
+        if (!m.buffer_age || !eglQuerySurface(m.egl_display, m.egl_surface, EGL_BUFFER_AGE_EXT, &age)) age = 0;
+        if (!m.overlay->draw(layer, age)) {
             m.error = m.overlay->error();
             return -1;
         }
@@ -539,6 +545,10 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
             gbm_surface_release_buffer(m.gsurf, bo);
             return -1;
         }
+        const hal::Nanos dt = mono_now() - t0;
+        m.stats.overlay_ns_total += dt;
+        m.stats.overlay_ns_max = std::max(m.stats.overlay_ns_max, dt);
+        ++m.stats.overlay_frames;
     }
 
     const hal::Nanos committed = mono_now();

@@ -154,6 +154,38 @@ TEST_F(GlesOverlayTest, PreviousFrameLeavesNothingBehind) {
     EXPECT_EQ(at(px, 35, 35)[3], 255);
 }
 
+// With a known buffer age only what was drawn since is cleared: the rest of the
+// buffer is left alone (here a marker that no draw made stays).
+TEST_F(GlesOverlayTest, BufferAgeClearsOnlyWhatWasDrawnSince) {
+    Layer a(kW, kH);
+    a.fill({0, 0, 16, 16}, 255, 0, 0, 255);
+    ASSERT_TRUE(overlay_.draw(&a.layer, 0));
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(40, 40, 4, 4);
+    glClearColor(0.f, 0.f, 1.f, 1.f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    glDisable(GL_SCISSOR_TEST);
+    Layer b(kW, kH);
+    b.fill({20, 0, 8, 8}, 0, 255, 0, 255);
+    ASSERT_TRUE(overlay_.draw(&b.layer, 1));
+    auto px = gl_.read();
+    EXPECT_EQ(at(px, 5, 5)[3], 0);      // a's rect: cleared
+    EXPECT_EQ(at(px, 21, 1)[1], 255);   // b drawn
+    EXPECT_EQ(at(px, 41, 41)[2], 255);  // the marker: untouched
+    // Age 2: the buffer holds the draw before last; a's and b's rects are cleared.
+    Layer c(kW, kH);
+    c.fill({0, 30, 4, 4}, 9, 9, 9, 255);
+    ASSERT_TRUE(overlay_.draw(&c.layer, 2));
+    px = gl_.read();
+    EXPECT_EQ(at(px, 21, 1)[3], 0);
+    EXPECT_EQ(at(px, 1, 31)[0], 9);
+    EXPECT_EQ(at(px, 41, 41)[2], 255);
+    // Unknown age: everything cleared.
+    ASSERT_TRUE(overlay_.draw(&c.layer, 0));
+    px = gl_.read();
+    EXPECT_EQ(at(px, 41, 41)[3], 0);
+}
+
 TEST_F(GlesOverlayTest, LargerLayerIsCutOff) {
     Layer l(kW + 20, kH + 10);
     l.fill({kW - 2, kH - 2, 10, 10}, 7, 8, 9, 255);

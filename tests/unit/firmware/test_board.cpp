@@ -213,10 +213,10 @@ TEST(BoardInput, CaptureButtonHandleValuesAndDefaults) {
 TEST(BoardInput, ErrorsNameTheLineAndField) {
     const std::pair<const char*, const char*> cases[] = {
         {"board: t\ncapture:\n  format: rgb\n",
-         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy or nv12)"},
+         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy, nv12 or bgrx)"},
         {"board: t\ncapture:\n  format: mjpeg\n",
          "3: field 'capture.format': MJPEG is not supported: decoding it would allocate per frame "
-         "(libjpeg image pools); set capture.format to yuyv, uyvy or nv12"},
+         "(libjpeg image pools); set capture.format to yuyv, uyvy, nv12 or bgrx"},
         {"board: t\ncapture:\n  dv_timings: 1080p\n",
          "3: field 'capture.dv_timings': expected query or timings like 1920x1080p60, got '1080p'"},
         {"board: t\ncapture:\n  buffers: 1\n", "3: field 'capture.buffers': must be between 2 and 16, got 1"},

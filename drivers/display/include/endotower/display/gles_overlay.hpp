@@ -12,6 +12,7 @@
 // Requires a current GLES2 context for every call, the destructor included.
 #pragma once
 
+#include <array>
 #include <string>
 
 #include "endotower/hal/overlay.hpp"
@@ -30,7 +31,10 @@ public:
 
     // Draws `layer` (nullptr or empty: fully transparent) into the bound framebuffer
     // of init's size. Parts of the layer outside that size are cut off.
-    bool draw(const hal::OverlayLayer* layer);
+    // buffer_age (EGL_EXT_buffer_age: the target holds what was drawn that many draws
+    // ago; 0 = unknown): when known, only the rects of the draws since are cleared,
+    // not the whole buffer (a full-screen clear costs a software rasteriser dearly).
+    bool draw(const hal::OverlayLayer* layer, int buffer_age = 0);
 
     int width() const { return width_; }
     int height() const { return height_; }
@@ -38,6 +42,15 @@ public:
 
 private:
     bool fail(const std::string& what);
+    void clear(int buffer_age);
+
+    struct Drawn {
+        std::array<hal::Rect, hal::OverlayLayer::kMaxRects> rects{};
+        std::size_t count = 0;
+    };
+    static constexpr int kHistory = 4;
+    std::array<Drawn, kHistory> history_{};  // [0] = the last draw
+    int history_size_ = 0;
 
     int width_ = 0, height_ = 0;
     unsigned program_ = 0, texture_ = 0, vbo_ = 0;

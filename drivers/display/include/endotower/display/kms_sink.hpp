@@ -46,7 +46,9 @@ struct KmsSinkConfig {
 
 struct KmsSinkStats {
     std::int64_t frames = 0, zero_copy_frames = 0, copied_frames = 0, dropped_frames = 0;
-    std::int64_t copy_ns_total = 0, copy_ns_max = 0;  // the CPU pass of the copy path
+    std::int64_t copy_ns_total = 0, copy_ns_max = 0;        // the CPU pass of the copy path
+    std::int64_t overlay_ns_total = 0, overlay_ns_max = 0;  // GLES draw + swap of the overlay
+    std::int64_t overlay_frames = 0;
     std::int64_t flip_timeouts = 0, disconnects = 0, reconnects = 0;
 };
 
