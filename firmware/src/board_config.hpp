@@ -47,15 +47,15 @@ struct BoardConfig {
         std::string device = "/dev/video0";
         std::string format = "yuyv";  // yuyv | uyvy | nv12 (mjpeg is refused)
         int width = 1920, height = 1080;
-        double fps = 0.0;             // 0 = the device's (or the DV timings') rate
+        double fps = 0.0;  // 0 = the device's (or the DV timings') rate
         int buffers = 4;
-        int input = -1;               // VIDIOC_S_INPUT; -1 = leave
-        std::string dv_timings;       // "" | "query" | "1920x1080p60"
+        int input = -1;          // VIDIOC_S_INPUT; -1 = leave
+        std::string dv_timings;  // "" | "query" | "1920x1080p60"
     } capture;
     // button: (GPIO through libgpiod; drivers/gpio)
     struct Button {
         bool present = false;
-        std::string chip;             // gpiochip name, label, path or number
+        std::string chip;  // gpiochip name, label, path or number
         int line = 0;
         bool active_low = false;
         double debounce_ms = 20.0;
@@ -64,9 +64,9 @@ struct BoardConfig {
     // handle: (USB HID through hidapi; drivers/hid, drivers/usb)
     struct Handle {
         bool present = false;
-        int vid = 0, pid = 0;         // 0x0000..0xffff, hex or decimal in the file
-        std::string serial;           // "" = any
-        int usage_page = 0;           // 0 = any
+        int vid = 0, pid = 0;  // 0x0000..0xffff, hex or decimal in the file
+        std::string serial;    // "" = any
+        int usage_page = 0;    // 0 = any
     } handle;
 };
 

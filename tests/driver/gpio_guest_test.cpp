@@ -55,7 +55,8 @@ protected:
     }
     // Sets the level the sim drives on `line` (its pull).
     static void level(int line, bool high) {
-        ASSERT_TRUE(write_file("/sys/devices/platform/" + dev_ + "/" + chip_ + "/sim_gpio" + std::to_string(line) + "/pull",
+        ASSERT_TRUE(write_file("/sys/devices/platform/" + dev_ + "/" + chip_ + "/sim_gpio" +
+                                   std::to_string(line) + "/pull",
                                high ? "pull-up" : "pull-down"));
     }
     static std::vector<hal::ControlEvent> collect(GpioButton& b) {

@@ -52,6 +52,7 @@ if [ -f "$out/ready" ]; then echo "$out"; exit 0; fi
 need_packages qemu-system-x86 || skip "qemu-system-x86 is not installed and cannot be installed here"
 command -v qemu-system-x86_64 >/dev/null || skip "qemu-system-x86_64 not found"
 need_packages busybox-static kmod "linux-headers-$kver" linux-source-6.1 build-essential udev \
+    v4l-utils gpiod libdrm-tests \
     || die "packages missing (see above)"
 
 mkdir -p "$cache"

@@ -21,23 +21,27 @@ public:
 
     // Creates the device (bus USB) and waits for the kernel's UHID_START.
     // Empty string on success, else what failed.
-    std::string create(std::span<const std::uint8_t> descriptor, std::uint16_t vid, std::uint16_t pid) {
+    std::string create(std::span<const std::uint8_t> descriptor, std::uint16_t vid,
+                       std::uint16_t pid) {
         fd_ = ::open("/dev/uhid", O_RDWR | O_CLOEXEC);
         if (fd_ < 0) return std::string("open(/dev/uhid): ") + std::strerror(errno);
         uhid_event ev{};
         ev.type = UHID_CREATE2;
-        std::snprintf(reinterpret_cast<char*>(ev.u.create2.name), sizeof ev.u.create2.name, "endotower test handle");
+        std::snprintf(reinterpret_cast<char*>(ev.u.create2.name), sizeof ev.u.create2.name,
+                      "endotower test handle");
         std::memcpy(ev.u.create2.rd_data, descriptor.data(), descriptor.size());
         ev.u.create2.rd_size = static_cast<std::uint16_t>(descriptor.size());
         ev.u.create2.bus = 0x03;  // BUS_USB
         ev.u.create2.vendor = vid;
         ev.u.create2.product = pid;
-        if (!send(ev)) return std::string("write(/dev/uhid, UHID_CREATE2): ") + std::strerror(errno);
+        if (!send(ev))
+            return std::string("write(/dev/uhid, UHID_CREATE2): ") + std::strerror(errno);
         for (;;) {
             pollfd p{fd_, POLLIN, 0};
             if (::poll(&p, 1, 10000) <= 0) return "no UHID_START within 10 s";
             uhid_event in{};
-            if (::read(fd_, &in, sizeof in) <= 0) return std::string("read(/dev/uhid): ") + std::strerror(errno);
+            if (::read(fd_, &in, sizeof in) <= 0)
+                return std::string("read(/dev/uhid): ") + std::strerror(errno);
             if (in.type == UHID_START) return {};
         }
     }
@@ -62,7 +66,9 @@ public:
     }
 
 private:
-    bool send(const uhid_event& ev) { return ::write(fd_, &ev, sizeof ev) == static_cast<ssize_t>(sizeof ev); }
+    bool send(const uhid_event& ev) {
+        return ::write(fd_, &ev, sizeof ev) == static_cast<ssize_t>(sizeof ev);
+    }
     int fd_ = -1;
 };
 

@@ -47,7 +47,8 @@ protected:
 // Waits for a frame through timeouts (up to `tries` of 1 s each).
 hal::SourceStatus next_not_timeout(V4l2Capture& cap, hal::Frame& f, int tries = 10) {
     hal::SourceStatus s = hal::SourceStatus::kTimeout;
-    for (int i = 0; i < tries && s == hal::SourceStatus::kTimeout; ++i) s = cap.next(f, hal::kSecond);
+    for (int i = 0; i < tries && s == hal::SourceStatus::kTimeout; ++i)
+        s = cap.next(f, hal::kSecond);
     return s;
 }
 
@@ -96,11 +97,13 @@ TEST_F(V4l2Guest, Captures1080p60YuyvWithSequenceAndMonotonicTimestamps) {
     EXPECT_EQ(s.drops, gaps);  // every sequence gap is counted, nothing else
     // vivid stamps frame n at start + n periods: the spread of kernel timestamps
     // over the sequence span is one frame period (to within 2 %).
-    const double per_seq = static_cast<double>(frames.back().capture_ns - frames.front().capture_ns) /
-                           static_cast<double>(frames.back().sequence - frames.front().sequence);
+    const double per_seq =
+        static_cast<double>(frames.back().capture_ns - frames.front().capture_ns) /
+        static_cast<double>(frames.back().sequence - frames.front().sequence);
     EXPECT_NEAR(per_seq, kPeriod1080p60, 0.02 * kPeriod1080p60);
-    std::printf("captured %d frames, %llu dropped by the driver, %llu skipped for newer ones\n", kFrames,
-                static_cast<unsigned long long>(s.drops), static_cast<unsigned long long>(s.skipped));
+    std::printf("captured %d frames, %llu dropped by the driver, %llu skipped for newer ones\n",
+                kFrames, static_cast<unsigned long long>(s.drops),
+                static_cast<unsigned long long>(s.skipped));
 }
 
 TEST_F(V4l2Guest, DroppedBuffersAreCountedFromSequenceGaps) {
@@ -111,8 +114,10 @@ TEST_F(V4l2Guest, DroppedBuffersAreCountedFromSequenceGaps) {
     for (int i = 0; i < 40; ++i) {
         hal::Frame f;
         ASSERT_EQ(next_not_timeout(cap, f), hal::SourceStatus::kFrame) << cap.error();
-        if (i == 0) first = f.sequence;
-        else gaps += f.sequence - last - 1;
+        if (i == 0)
+            first = f.sequence;
+        else
+            gaps += f.sequence - last - 1;
         last = f.sequence;
         cap.release(f);
     }
@@ -213,14 +218,16 @@ TEST(V4l2GuestErrors, ClearMessagesForBadConfiguration) {
     c.device = "/dev/video1";  // vivid's video output node
     V4l2Capture output(c);
     EXPECT_FALSE(output.start());
-    EXPECT_NE(output.error().find("/dev/video1: not a single-planar streaming capture device"), std::string::npos)
+    EXPECT_NE(output.error().find("/dev/video1: not a single-planar streaming capture device"),
+              std::string::npos)
         << output.error();
 
     c = hdmi_1080p60();
     c.dv_timings = "1921x1080p60";
     V4l2Capture timings(c);
     EXPECT_FALSE(timings.start());
-    EXPECT_NE(timings.error().find("lists no DV timings 1921x1080p60"), std::string::npos) << timings.error();
+    EXPECT_NE(timings.error().find("lists no DV timings 1921x1080p60"), std::string::npos)
+        << timings.error();
 }
 
 }  // namespace

@@ -32,7 +32,7 @@ bool ButtonDebouncer::next(hal::Nanos now, hal::ControlEvent& out) {
     if (!excursion_ || now - last_edge_ < p_.debounce_ns) return false;
     excursion_ = false;
     if (raw_ == stable_) {
-        ++glitches_;  // left and came back within the debounce time
+        ++glitches_;            // left and came back within the debounce time
         return next(now, out);  // a long press it held back may be due
     }
     stable_ = raw_;

@@ -34,7 +34,9 @@ struct GpioButton::Impl {
     mutable std::mutex stats_mutex;
     GpioStats stats;
 
-    std::string where() const { return "GPIO " + config.chip + " line " + std::to_string(config.line); }
+    std::string where() const {
+        return "GPIO " + config.chip + " line " + std::to_string(config.line);
+    }
 
     void run(ButtonDebouncer debouncer) {
         gpiod_line_event events[16];
@@ -43,7 +45,10 @@ struct GpioButton::Impl {
             int timeout_ms = -1;
             if (d >= 0) {
                 const hal::Nanos left = d - monotonic_now();
-                timeout_ms = left <= 0 ? 0 : static_cast<int>((left + hal::kMillisecond - 1) / hal::kMillisecond);
+                timeout_ms =
+                    left <= 0
+                        ? 0
+                        : static_cast<int>((left + hal::kMillisecond - 1) / hal::kMillisecond);
             }
             pollfd fds[2] = {{event_fd, POLLIN, 0}, {wake_fd, POLLIN, 0}};
             if (system::retry_eintr([&] { return ::poll(fds, 2, timeout_ms); }) < 0) return;
@@ -81,7 +86,9 @@ GpioButton::GpioButton(GpioButtonConfig config) : impl_(std::make_unique<Impl>()
     impl_->config = std::move(config);
 }
 
-GpioButton::~GpioButton() { stop(); }
+GpioButton::~GpioButton() {
+    stop();
+}
 
 bool GpioButton::start(std::string& error) {
     Impl& m = *impl_;
@@ -94,15 +101,18 @@ bool GpioButton::start(std::string& error) {
     }
     m.line = gpiod_chip_get_line(m.chip, m.config.line);
     if (m.line == nullptr) {
-        error = m.where() + ": " + system::errno_message("gpiod_chip_get_line", gpiod_chip_name(m.chip), errno) +
+        error = m.where() + ": " +
+                system::errno_message("gpiod_chip_get_line", gpiod_chip_name(m.chip), errno) +
                 " (the chip has " + std::to_string(gpiod_chip_num_lines(m.chip)) + " lines)";
         m.close_all();
         return false;
     }
     const int flags = m.config.active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;
     if (gpiod_line_request_both_edges_events_flags(m.line, m.config.consumer.c_str(), flags) < 0) {
-        error = m.where() + ": " + system::errno_message("gpiod_line_request_both_edges_events", "", errno) +
-                (errno == EBUSY ? " (the line is used by another consumer; gpioinfo shows which)" : "");
+        error =
+            m.where() + ": " +
+            system::errno_message("gpiod_line_request_both_edges_events", "", errno) +
+            (errno == EBUSY ? " (the line is used by another consumer; gpioinfo shows which)" : "");
         m.line = nullptr;  // not requested: nothing to release
         m.close_all();
         return false;
@@ -131,7 +141,9 @@ void GpioButton::stop() {
     m.close_all();
 }
 
-bool GpioButton::poll(hal::ControlEvent& out) { return impl_->ring.pop(out); }
+bool GpioButton::poll(hal::ControlEvent& out) {
+    return impl_->ring.pop(out);
+}
 
 GpioStats GpioButton::stats() const {
     std::lock_guard lock(impl_->stats_mutex);

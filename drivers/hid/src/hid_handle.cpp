@@ -77,9 +77,11 @@ struct HidHandle::Impl {
 
     bool try_open() {
         hid_device_info* list = hid_enumerate(config.vid, config.pid);
-        std::string why = name + ": no device with this VID/PID" +
-                          (config.serial.empty() ? "" : " and serial " + config.serial) +
-                          (config.usage_page ? " and usage page " + hex_id(config.usage_page, 0).substr(0, 4) : "");
+        std::string why =
+            name + ": no device with this VID/PID" +
+            (config.serial.empty() ? "" : " and serial " + config.serial) +
+            (config.usage_page ? " and usage page " + hex_id(config.usage_page, 0).substr(0, 4)
+                               : "");
         for (hid_device_info* d = list; d != nullptr && dev == nullptr; d = d->next) {
             if (!matches(d)) continue;
             std::vector<std::uint8_t> desc;
@@ -95,7 +97,8 @@ struct HidHandle::Impl {
             }
             dev = hid_open_path(d->path);
             if (dev == nullptr) {
-                why = name + " (" + d->path + "): cannot open (permissions? the udev rule gives the group access)";
+                why = name + " (" + d->path +
+                      "): cannot open (permissions? the udev rule gives the group access)";
                 continue;
             }
             layout = l;
@@ -127,14 +130,16 @@ struct HidHandle::Impl {
     // Sleeps until stop, notify_arrival() or a new/changed /dev/hidraw* node.
     void wait_for_arrival() {
         pollfd fds[2] = {{wake_fd, POLLIN, 0}, {inotify_fd, POLLIN, 0}};
-        if (system::retry_eintr([&] { return ::poll(fds, inotify_fd >= 0 ? 2 : 1, -1); }) < 0) return;
+        if (system::retry_eintr([&] { return ::poll(fds, inotify_fd >= 0 ? 2 : 1, -1); }) < 0)
+            return;
         if (fds[0].revents & POLLIN) {
             std::uint64_t v;
             (void)!::read(wake_fd, &v, sizeof v);
         }
         if (inotify_fd >= 0 && (fds[1].revents & POLLIN)) {
             alignas(inotify_event) char buf[4096];
-            (void)!::read(inotify_fd, buf, sizeof buf);  // which node does not matter: enumerate again
+            (void)!::read(inotify_fd, buf,
+                          sizeof buf);  // which node does not matter: enumerate again
         }
     }
 
@@ -154,15 +159,26 @@ struct HidHandle::Impl {
             }
             if (n == 0) continue;
             int count = 0;
-            const ReportStatus s = decoder->decode({buf.data(), static_cast<std::size_t>(n)}, clock.now(), events, count);
+            const ReportStatus s = decoder->decode({buf.data(), static_cast<std::size_t>(n)},
+                                                   clock.now(), events, count);
             {
                 std::lock_guard lock(stats_mutex);
                 switch (s) {
-                    case ReportStatus::kOk: ++stats.reports; break;
-                    case ReportStatus::kShort: ++stats.short_reports, ++stats.rejected; break;
-                    case ReportStatus::kOversized: ++stats.oversized, ++stats.rejected; break;
-                    case ReportStatus::kUnknownId: ++stats.unknown_id, ++stats.rejected; break;
-                    case ReportStatus::kEmpty: ++stats.rejected; break;
+                    case ReportStatus::kOk:
+                        ++stats.reports;
+                        break;
+                    case ReportStatus::kShort:
+                        ++stats.short_reports, ++stats.rejected;
+                        break;
+                    case ReportStatus::kOversized:
+                        ++stats.oversized, ++stats.rejected;
+                        break;
+                    case ReportStatus::kUnknownId:
+                        ++stats.unknown_id, ++stats.rejected;
+                        break;
+                    case ReportStatus::kEmpty:
+                        ++stats.rejected;
+                        break;
                 }
             }
             for (int i = 0; i < count; ++i) push(events[i]);
@@ -182,7 +198,9 @@ HidHandle::HidHandle(HidHandleConfig config) : impl_(std::make_unique<Impl>()) {
     impl_->name = "HID " + hex_id(impl_->config.vid, impl_->config.pid);
 }
 
-HidHandle::~HidHandle() { stop(); }
+HidHandle::~HidHandle() {
+    stop();
+}
 
 bool HidHandle::start(std::string& error) {
     Impl& m = *impl_;
@@ -223,7 +241,9 @@ void HidHandle::stop() {
     }
 }
 
-bool HidHandle::poll(hal::ControlEvent& out) { return impl_->ring.pop(out); }
+bool HidHandle::poll(hal::ControlEvent& out) {
+    return impl_->ring.pop(out);
+}
 
 void HidHandle::notify_arrival() {
     if (impl_->wake_fd < 0) return;
@@ -231,7 +251,9 @@ void HidHandle::notify_arrival() {
     (void)!::write(impl_->wake_fd, &one, sizeof one);
 }
 
-bool HidHandle::connected() const { return impl_->is_connected; }
+bool HidHandle::connected() const {
+    return impl_->is_connected;
+}
 
 HidStats HidHandle::stats() const {
     std::lock_guard lock(impl_->stats_mutex);

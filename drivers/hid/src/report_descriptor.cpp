@@ -7,8 +7,8 @@ namespace {
 constexpr std::uint16_t kPageGenericDesktop = 0x01;
 constexpr std::uint16_t kPageButton = 0x09;
 constexpr std::uint16_t kUsageWheel = 0x38;
-constexpr int kMaxUsages = 64;      // local usages kept per main item
-constexpr int kMaxPushDepth = 8;    // Push/Pop nesting
+constexpr int kMaxUsages = 64;    // local usages kept per main item
+constexpr int kMaxPushDepth = 8;  // Push/Pop nesting
 constexpr int kMaxCollectionDepth = 16;
 constexpr std::uint32_t kMaxReportBits = kMaxReportBytes * 8;
 
@@ -59,7 +59,8 @@ int HandleLayout::button_count() const {
     return n;
 }
 
-bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out, std::string& error) {
+bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out,
+                             std::string& error) {
     HandleLayout layout;
     Globals g;
     std::array<Globals, kMaxPushDepth> stack{};
@@ -87,28 +88,37 @@ bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out,
         i += size;
         const std::uint32_t uv = unsigned_value(data, size);
         const int type = (prefix >> 2) & 3, tag = prefix >> 4;
-        if (type == 0) {  // main
+        if (type == 0) {       // main
             if (tag == 0x8) {  // Input
-                if (g.report_size == 0 || g.report_size > 32) return fail(at, "Input with report size 0 or > 32");
-                if (g.report_count > kMaxReportBits) return fail(at, "Input report count too large");
+                if (g.report_size == 0 || g.report_size > 32)
+                    return fail(at, "Input with report size 0 or > 32");
+                if (g.report_count > kMaxReportBits)
+                    return fail(at, "Input report count too large");
                 std::uint32_t& bits = input_bits[g.report_id];
                 const bool constant = uv & 1, variable = uv & 2, relative = uv & 4;
                 for (std::uint32_t f = 0; f < g.report_count && !constant && variable; ++f) {
                     const std::uint32_t u = l.usage(f);
                     const std::uint32_t off = bits + f * g.report_size;
                     if (off + g.report_size > kMaxReportBits) break;
-                    ReportField field{true, g.report_id, static_cast<std::uint16_t>(off),
-                                      static_cast<std::uint8_t>(g.report_size), g.logical_min < 0, relative};
+                    ReportField field{true,
+                                      g.report_id,
+                                      static_cast<std::uint16_t>(off),
+                                      static_cast<std::uint8_t>(g.report_size),
+                                      g.logical_min < 0,
+                                      relative};
                     const std::uint16_t page = u >> 16, id = u & 0xffff;
-                    if (page == kPageButton && id >= 1 && id <= kMaxButtons && !layout.buttons[id - 1].present)
+                    if (page == kPageButton && id >= 1 && id <= kMaxButtons &&
+                        !layout.buttons[id - 1].present)
                         layout.buttons[id - 1] = field;
-                    else if (page == kPageGenericDesktop && id == kUsageWheel && !layout.wheel.present)
+                    else if (page == kPageGenericDesktop && id == kUsageWheel &&
+                             !layout.wheel.present)
                         layout.wheel = field;
                 }
                 bits += g.report_size * g.report_count;
                 if (bits > kMaxReportBits) return fail(at, "input report longer than 64 bytes");
             } else if (tag == 0xa) {
-                if (++collections > kMaxCollectionDepth) return fail(at, "collections nested too deep");
+                if (++collections > kMaxCollectionDepth)
+                    return fail(at, "collections nested too deep");
             } else if (tag == 0xc) {
                 if (--collections < 0) return fail(at, "End Collection without Collection");
             } else if (tag != 0x9 && tag != 0xb) {
@@ -117,15 +127,23 @@ bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out,
             l = Locals{};
         } else if (type == 1) {  // global
             switch (tag) {
-                case 0x0: g.usage_page = static_cast<std::uint16_t>(uv); break;
-                case 0x1: g.logical_min = signed_value(data, size); break;
-                case 0x7: g.report_size = uv; break;
+                case 0x0:
+                    g.usage_page = static_cast<std::uint16_t>(uv);
+                    break;
+                case 0x1:
+                    g.logical_min = signed_value(data, size);
+                    break;
+                case 0x7:
+                    g.report_size = uv;
+                    break;
                 case 0x8:
                     if (uv == 0 || uv > 255) return fail(at, "report ID must be 1..255");
                     g.report_id = static_cast<std::uint8_t>(uv);
                     saw_id = true;
                     break;
-                case 0x9: g.report_count = uv; break;
+                case 0x9:
+                    g.report_count = uv;
+                    break;
                 case 0xa:
                     if (depth == kMaxPushDepth) return fail(at, "Push nested too deep");
                     stack[depth++] = g;
@@ -134,10 +152,12 @@ bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out,
                     if (depth == 0) return fail(at, "Pop without Push");
                     g = stack[--depth];
                     break;
-                default: break;  // logical max, physical range, unit: not needed
+                default:
+                    break;  // logical max, physical range, unit: not needed
             }
         } else if (type == 2) {  // local
-            if (tag == 0x0 && l.count < kMaxUsages) l.usages[l.count++] = full_usage(uv, size, g.usage_page);
+            if (tag == 0x0 && l.count < kMaxUsages)
+                l.usages[l.count++] = full_usage(uv, size, g.usage_page);
             if (tag == 0x1) l.min = full_usage(uv, size, g.usage_page), l.has_range = true;
             if (tag == 0x2) l.max = full_usage(uv, size, g.usage_page), l.has_range = true;
         } else {
@@ -145,9 +165,11 @@ bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out,
         }
     }
     if (collections != 0) return fail(d.size(), "unclosed collection");
-    if (saw_id && input_bits[0] != 0) return fail(d.size(), "input fields before the first report ID");
+    if (saw_id && input_bits[0] != 0)
+        return fail(d.size(), "input fields before the first report ID");
     if (layout.button_count() == 0 && !layout.wheel.present)
-        return fail(d.size(), "no button (page 0x09) and no wheel (page 0x01 usage 0x38) input field");
+        return fail(d.size(),
+                    "no button (page 0x09) and no wheel (page 0x01 usage 0x38) input field");
     layout.numbered = saw_id;
     for (std::size_t id = 0; id < input_bits.size(); ++id)
         layout.input_bytes[id] = static_cast<std::uint16_t>((input_bits[id] + 7) / 8);
@@ -157,11 +179,16 @@ bool parse_report_descriptor(std::span<const std::uint8_t> d, HandleLayout& out,
 
 const char* to_string(ReportStatus s) {
     switch (s) {
-        case ReportStatus::kOk: return "ok";
-        case ReportStatus::kEmpty: return "empty";
-        case ReportStatus::kUnknownId: return "unknown report ID";
-        case ReportStatus::kShort: return "short";
-        case ReportStatus::kOversized: return "oversized";
+        case ReportStatus::kOk:
+            return "ok";
+        case ReportStatus::kEmpty:
+            return "empty";
+        case ReportStatus::kUnknownId:
+            return "unknown report ID";
+        case ReportStatus::kShort:
+            return "short";
+        case ReportStatus::kOversized:
+            return "oversized";
     }
     return "?";
 }
@@ -177,7 +204,8 @@ std::uint32_t extract(const std::uint8_t* p, const ReportField& f) {
 }  // namespace
 
 ReportStatus ReportDecoder::decode(std::span<const std::uint8_t> report, hal::Nanos time_ns,
-                                   std::array<hal::ControlEvent, kMaxButtons + 1>& out, int& count) {
+                                   std::array<hal::ControlEvent, kMaxButtons + 1>& out,
+                                   int& count) {
     count = 0;
     if (report.empty()) return ReportStatus::kEmpty;
     const std::uint8_t id = layout_.numbered ? report[0] : 0;
@@ -195,8 +223,9 @@ ReportStatus ReportDecoder::decode(std::span<const std::uint8_t> report, hal::Na
         const bool down = extract(p, f) != 0;
         if (down == ((buttons >> b) & 1)) continue;
         buttons ^= 1u << b;
-        out[count++] = {down ? hal::ControlEvent::Kind::kButtonPress : hal::ControlEvent::Kind::kButtonRelease,
-                        static_cast<std::uint8_t>(b), 0, time_ns};
+        out[count++] = {
+            down ? hal::ControlEvent::Kind::kButtonPress : hal::ControlEvent::Kind::kButtonRelease,
+            static_cast<std::uint8_t>(b), 0, time_ns};
     }
     buttons_ = buttons;
     const ReportField& w = layout_.wheel;
@@ -206,17 +235,20 @@ ReportStatus ReportDecoder::decode(std::span<const std::uint8_t> report, hal::Na
         // An absolute wheel would need its previous position; handles send relative detents.
         if (v != 0 && w.relative) {
             const std::int64_t clamped = v > 32767 ? 32767 : (v < -32768 ? -32768 : v);
-            out[count++] = {hal::ControlEvent::Kind::kWheel, 0, static_cast<std::int16_t>(clamped), time_ns};
+            out[count++] = {hal::ControlEvent::Kind::kWheel, 0, static_cast<std::int16_t>(clamped),
+                            time_ns};
         }
     }
     return ReportStatus::kOk;
 }
 
-int ReportDecoder::release_all(hal::Nanos time_ns, std::array<hal::ControlEvent, kMaxButtons + 1>& out) {
+int ReportDecoder::release_all(hal::Nanos time_ns,
+                               std::array<hal::ControlEvent, kMaxButtons + 1>& out) {
     int count = 0;
     for (int b = 0; b < kMaxButtons; ++b)
         if ((buttons_ >> b) & 1)
-            out[count++] = {hal::ControlEvent::Kind::kButtonRelease, static_cast<std::uint8_t>(b), 0, time_ns};
+            out[count++] = {hal::ControlEvent::Kind::kButtonRelease, static_cast<std::uint8_t>(b),
+                            0, time_ns};
     buttons_ = 0;
     return count;
 }

@@ -45,7 +45,9 @@ UsbHotplug::UsbHotplug(std::uint16_t vid, std::uint16_t pid) : impl_(std::make_u
     impl_->pid = pid;
 }
 
-UsbHotplug::~UsbHotplug() { stop(); }
+UsbHotplug::~UsbHotplug() {
+    stop();
+}
 
 bool UsbHotplug::start(Listener listener, std::string& error) {
     Impl& m = *impl_;
@@ -56,15 +58,17 @@ bool UsbHotplug::start(Listener listener, std::string& error) {
         return false;
     }
     if (!libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
-        error = m.name() + ": libusb has no hotplug support on this system (LIBUSB_CAP_HAS_HOTPLUG); "
-                           "the handle reconnects through its /dev/hidraw watch only";
+        error = m.name() +
+                ": libusb has no hotplug support on this system (LIBUSB_CAP_HAS_HOTPLUG); "
+                "the handle reconnects through its /dev/hidraw watch only";
         m.close();
         return false;
     }
     m.listener = std::move(listener);
     const int r = libusb_hotplug_register_callback(
-        m.ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED | LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT, LIBUSB_HOTPLUG_ENUMERATE,
-        m.vid, m.pid, LIBUSB_HOTPLUG_MATCH_ANY, &Impl::on_event, &m, &m.handle);
+        m.ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED | LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT,
+        LIBUSB_HOTPLUG_ENUMERATE, m.vid, m.pid, LIBUSB_HOTPLUG_MATCH_ANY, &Impl::on_event, &m,
+        &m.handle);
     if (r != LIBUSB_SUCCESS) {
         error = m.name() + ": libusb_hotplug_register_callback: " + libusb_strerror(r);
         m.close();
@@ -90,7 +94,11 @@ void UsbHotplug::stop() {
     m.close();
 }
 
-std::uint64_t UsbHotplug::arrivals() const { return impl_->arrivals; }
-std::uint64_t UsbHotplug::removals() const { return impl_->removals; }
+std::uint64_t UsbHotplug::arrivals() const {
+    return impl_->arrivals;
+}
+std::uint64_t UsbHotplug::removals() const {
+    return impl_->removals;
+}
 
 }  // namespace endotower::usb

@@ -65,13 +65,15 @@ bool parse_dv_timings_name(std::string_view t, DvTimingsName& out) {
     d.interlaced = *r.ptr == 'i';
     r = std::from_chars(r.ptr + 1, end, d.hz);
     if (r.ec != std::errc() || r.ptr != end) return false;
-    if (d.width <= 0 || d.height <= 0 || d.width > 16384 || d.height > 16384 || !(d.hz > 0) || d.hz > 1000)
+    if (d.width <= 0 || d.height <= 0 || d.width > 16384 || d.height > 16384 || !(d.hz > 0) ||
+        d.hz > 1000)
         return false;
     out = d;
     return true;
 }
 
-double dv_refresh_hz(std::uint64_t pixelclock, std::uint32_t total_width, std::uint32_t total_height) {
+double dv_refresh_hz(std::uint64_t pixelclock, std::uint32_t total_width,
+                     std::uint32_t total_height) {
     if (total_width == 0 || total_height == 0) return 0.0;
     return static_cast<double>(pixelclock) / (static_cast<double>(total_width) * total_height);
 }

@@ -40,8 +40,8 @@ struct V4l2Capture::Impl {
     std::array<Buffer, kMaxBuffers> buffers{};
     int count = 0;
     bool streaming = false;
-    bool restart = false;      // format change seen: restart at the next next()
-    bool dv = false;           // DV timings in use (HDMI receiver)
+    bool restart = false;  // format change seen: restart at the next next()
+    bool dv = false;       // DV timings in use (HDMI receiver)
     std::string error;
     hal::FrameFormat fmt;
     hal::Nanos period = hal::kSecond / 60;
@@ -61,11 +61,13 @@ struct V4l2Capture::Impl {
     }
 
     bool open_device() {
-        fd = system::retry_eintr([&] { return ::open(config.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC); });
+        fd = system::retry_eintr(
+            [&] { return ::open(config.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC); });
         if (fd < 0) return fail("open", errno);
         v4l2_capability cap{};
         if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) return fail("VIDIOC_QUERYCAP", errno);
-        const std::uint32_t caps = cap.capabilities & V4L2_CAP_DEVICE_CAPS ? cap.device_caps : cap.capabilities;
+        const std::uint32_t caps =
+            cap.capabilities & V4L2_CAP_DEVICE_CAPS ? cap.device_caps : cap.capabilities;
         if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) {
             error = config.device + ": not a single-planar streaming capture device (driver " +
                     reinterpret_cast<const char*>(cap.driver) + "); check capture.device";
@@ -83,7 +85,8 @@ struct V4l2Capture::Impl {
             v4l2_event_subscription sub{};
             sub.type = V4L2_EVENT_SOURCE_CHANGE;
             sub.id = static_cast<std::uint32_t>(input);
-            if (xioctl(VIDIOC_SUBSCRIBE_EVENT, &sub) < 0) return fail("VIDIOC_SUBSCRIBE_EVENT(SOURCE_CHANGE)", errno);
+            if (xioctl(VIDIOC_SUBSCRIBE_EVENT, &sub) < 0)
+                return fail("VIDIOC_SUBSCRIBE_EVENT(SOURCE_CHANGE)", errno);
         }
         stats.present = true;
         return true;
@@ -97,7 +100,8 @@ struct V4l2Capture::Impl {
             if (xioctl(VIDIOC_QUERY_DV_TIMINGS, &t) < 0) {
                 if (errno == ENOLINK || errno == ENOLCK || errno == ERANGE) {
                     stats.signal = false;
-                    error = config.device + ": no signal (VIDIOC_QUERY_DV_TIMINGS: " + std::strerror(errno) + ")";
+                    error = config.device +
+                            ": no signal (VIDIOC_QUERY_DV_TIMINGS: " + std::strerror(errno) + ")";
                     return false;
                 }
                 return fail("VIDIOC_QUERY_DV_TIMINGS", errno);
@@ -118,8 +122,10 @@ struct V4l2Capture::Impl {
                 const v4l2_bt_timings& bt = e.timings.bt;
                 const bool il = bt.interlaced;
                 const double hz = dv_refresh_hz(bt.pixelclock, V4L2_DV_BT_FRAME_WIDTH(&bt),
-                                                V4L2_DV_BT_FRAME_HEIGHT(&bt)) * (il ? 2 : 1);
-                if (dv_matches(want, bt.width, bt.height, il, hz) && std::fabs(hz - want.hz) < best) {
+                                                V4L2_DV_BT_FRAME_HEIGHT(&bt)) *
+                                  (il ? 2 : 1);
+                if (dv_matches(want, bt.width, bt.height, il, hz) &&
+                    std::fabs(hz - want.hz) < best) {
                     best = std::fabs(hz - want.hz);
                     t = e.timings;
                     found = true;
@@ -134,7 +140,8 @@ struct V4l2Capture::Impl {
         if (xioctl(VIDIOC_S_DV_TIMINGS, &t) < 0) return fail("VIDIOC_S_DV_TIMINGS", errno);
         config.width = static_cast<int>(t.bt.width);
         config.height = static_cast<int>(t.bt.height);
-        const double hz = dv_refresh_hz(t.bt.pixelclock, V4L2_DV_BT_FRAME_WIDTH(&t.bt), V4L2_DV_BT_FRAME_HEIGHT(&t.bt));
+        const double hz = dv_refresh_hz(t.bt.pixelclock, V4L2_DV_BT_FRAME_WIDTH(&t.bt),
+                                        V4L2_DV_BT_FRAME_HEIGHT(&t.bt));
         if (hz > 0) period = static_cast<hal::Nanos>(std::llround(1e9 / hz));
         stats.signal = true;
         return true;
@@ -158,10 +165,11 @@ struct V4l2Capture::Impl {
                     fourcc_name(f.fmt.pix.pixelformat) + "); see v4l2-ctl --list-formats-ext";
             return false;
         }
-        if (static_cast<int>(f.fmt.pix.width) != config.width || static_cast<int>(f.fmt.pix.height) != config.height) {
+        if (static_cast<int>(f.fmt.pix.width) != config.width ||
+            static_cast<int>(f.fmt.pix.height) != config.height) {
             error = config.device + ": cannot capture " + std::to_string(config.width) + "x" +
-                    std::to_string(config.height) + " (it offers " + std::to_string(f.fmt.pix.width) + "x" +
-                    std::to_string(f.fmt.pix.height) + ")";
+                    std::to_string(config.height) + " (it offers " +
+                    std::to_string(f.fmt.pix.width) + "x" + std::to_string(f.fmt.pix.height) + ")";
             return false;
         }
         fmt = {static_cast<int>(f.fmt.pix.width), static_cast<int>(f.fmt.pix.height),
@@ -169,8 +177,10 @@ struct V4l2Capture::Impl {
         if (!dv && config.fps > 0) {
             v4l2_streamparm p{};
             p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-            p.parm.capture.timeperframe = {1000, static_cast<std::uint32_t>(std::lround(config.fps * 1000))};
-            if (xioctl(VIDIOC_S_PARM, &p) < 0 && errno != ENOTTY) return fail("VIDIOC_S_PARM", errno);
+            p.parm.capture.timeperframe = {
+                1000, static_cast<std::uint32_t>(std::lround(config.fps * 1000))};
+            if (xioctl(VIDIOC_S_PARM, &p) < 0 && errno != ENOTTY)
+                return fail("VIDIOC_S_PARM", errno);
         }
         v4l2_streamparm p{};
         p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -187,7 +197,8 @@ struct V4l2Capture::Impl {
         req.memory = V4L2_MEMORY_MMAP;
         if (xioctl(VIDIOC_REQBUFS, &req) < 0) return fail("VIDIOC_REQBUFS", errno);
         if (req.count < 2) {
-            error = config.device + ": the driver granted " + std::to_string(req.count) + " buffers, need 2";
+            error = config.device + ": the driver granted " + std::to_string(req.count) +
+                    " buffers, need 2";
             return false;
         }
         count = static_cast<int>(std::min<std::uint32_t>(req.count, kMaxBuffers));
@@ -199,7 +210,8 @@ struct V4l2Capture::Impl {
             if (xioctl(VIDIOC_QUERYBUF, &b) < 0) return fail("VIDIOC_QUERYBUF", errno);
             Buffer& buf = buffers[i];
             buf.length = b.length;
-            buf.data = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, b.m.offset);
+            buf.data =
+                ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, b.m.offset);
             if (buf.data == MAP_FAILED) return fail("mmap", errno);
             v4l2_exportbuffer e{};
             e.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -285,7 +297,8 @@ struct V4l2Capture::Impl {
                 continue;
             }
             stats.signal = true;
-            if (static_cast<int>(t.bt.width) != fmt.width || static_cast<int>(t.bt.height) != fmt.height) {
+            if (static_cast<int>(t.bt.width) != fmt.width ||
+                static_cast<int>(t.bt.height) != fmt.height) {
                 config.dv_timings = "query";
                 restart = true;
             }
@@ -293,7 +306,8 @@ struct V4l2Capture::Impl {
     }
 
     hal::SourceStatus sleep_timeout(hal::Nanos timeout_ns) {
-        timespec ts{static_cast<time_t>(timeout_ns / hal::kSecond), static_cast<long>(timeout_ns % hal::kSecond)};
+        timespec ts{static_cast<time_t>(timeout_ns / hal::kSecond),
+                    static_cast<long>(timeout_ns % hal::kSecond)};
         while (::clock_nanosleep(CLOCK_MONOTONIC, 0, &ts, &ts) == EINTR) {
         }
         ++stats.timeouts;
@@ -305,7 +319,9 @@ V4l2Capture::V4l2Capture(V4l2CaptureConfig config) : impl_(std::make_unique<Impl
     impl_->config = std::move(config);
 }
 
-V4l2Capture::~V4l2Capture() { stop(); }
+V4l2Capture::~V4l2Capture() {
+    stop();
+}
 
 bool V4l2Capture::start() {
     Impl& m = *impl_;
@@ -362,7 +378,8 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         const int fd = m.fd;
         lock.unlock();
         const int r = system::retry_eintr([&] {
-            return ::poll(&p, 1, static_cast<int>((left + hal::kMillisecond - 1) / hal::kMillisecond));
+            return ::poll(&p, 1,
+                          static_cast<int>((left + hal::kMillisecond - 1) / hal::kMillisecond));
         });
         lock.lock();
         if (fd != m.fd) continue;  // stopped meanwhile
@@ -388,7 +405,8 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
             }
             if (m.borrowed == m.count) {
                 lock.unlock();
-                return m.sleep_timeout(deadline - monotonic_now() > 0 ? deadline - monotonic_now() : 0);
+                return m.sleep_timeout(deadline - monotonic_now() > 0 ? deadline - monotonic_now()
+                                                                      : 0);
             }
         }
         if (!(p.revents & POLLIN)) continue;
@@ -436,8 +454,9 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         out.dmabuf_fd = m.buffers[index].dmabuf;  // the display scans it out without a copy
         const bool monotonic =
             (newest.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
-        out.capture_ns = monotonic ? newest.timestamp.tv_sec * hal::kSecond + newest.timestamp.tv_usec * 1000
-                                   : monotonic_now();
+        out.capture_ns =
+            monotonic ? newest.timestamp.tv_sec * hal::kSecond + newest.timestamp.tv_usec * 1000
+                      : monotonic_now();
         m.buffers[index].borrowed = true;
         ++m.borrowed;
         ++m.stats.frames;
@@ -459,12 +478,20 @@ hal::FrameFormat V4l2Capture::format() const {
     std::lock_guard lock(impl_->mutex);
     return impl_->fmt;
 }
-hal::Nanos V4l2Capture::frame_period() const { return impl_->period; }
-int V4l2Capture::buffer_count() const { return impl_->count > 0 ? impl_->count : impl_->config.buffers; }
-const std::string& V4l2Capture::error() const { return impl_->error; }
+hal::Nanos V4l2Capture::frame_period() const {
+    return impl_->period;
+}
+int V4l2Capture::buffer_count() const {
+    return impl_->count > 0 ? impl_->count : impl_->config.buffers;
+}
+const std::string& V4l2Capture::error() const {
+    return impl_->error;
+}
 int V4l2Capture::dmabuf_fd(int index) const {
     return index >= 0 && index < impl_->count ? impl_->buffers[index].dmabuf : -1;
 }
-const CaptureStats& V4l2Capture::stats() const { return impl_->stats; }
+const CaptureStats& V4l2Capture::stats() const {
+    return impl_->stats;
+}
 
 }  // namespace endotower::v4l2

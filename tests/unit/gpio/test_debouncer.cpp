@@ -20,7 +20,8 @@ std::vector<hal::ControlEvent> drain(ButtonDebouncer& d, hal::Nanos now) {
 
 TEST(Debouncer, BouncyPressAndReleaseGiveOneEventEachAtTheFirstEdge) {
     ButtonDebouncer d({20 * ms, 0, 0}, false);
-    for (hal::Nanos t : {100, 101, 103, 104, 108}) d.edge(t % 2 == 0, t * ms);  // ends active at 108
+    for (hal::Nanos t : {100, 101, 103, 104, 108})
+        d.edge(t % 2 == 0, t * ms);  // ends active at 108
     EXPECT_EQ(d.deadline(), 128 * ms);
     EXPECT_TRUE(drain(d, 127 * ms).empty());  // not yet stable for 20 ms
     auto ev = drain(d, 128 * ms);
@@ -29,7 +30,7 @@ TEST(Debouncer, BouncyPressAndReleaseGiveOneEventEachAtTheFirstEdge) {
     EXPECT_EQ(ev[0].time_ns, 100 * ms);
     EXPECT_TRUE(d.pressed());
     EXPECT_EQ(d.deadline(), -1);  // no long press configured
-    d.edge(false, 300 * ms);  // contact breaks at 300, bounces, inactive from 305
+    d.edge(false, 300 * ms);      // contact breaks at 300, bounces, inactive from 305
     d.edge(true, 302 * ms);
     d.edge(false, 305 * ms);
     ev = drain(d, 400 * ms);
@@ -96,7 +97,7 @@ TEST(Debouncer, GlitchDuringHoldDoesNotCancelTheLongPress) {
     ASSERT_EQ(drain(d, 20 * ms).size(), 1u);
     d.edge(false, 790 * ms);
     d.edge(true, 795 * ms);
-    EXPECT_EQ(d.deadline(), 815 * ms);   // the excursion must resolve first
+    EXPECT_EQ(d.deadline(), 815 * ms);  // the excursion must resolve first
     EXPECT_TRUE(drain(d, 810 * ms).empty());
     const auto ev = drain(d, 815 * ms);
     ASSERT_EQ(ev.size(), 1u);

@@ -70,7 +70,7 @@ TEST(ReportDecoder, PressReleaseAndScrollFromHandleReports) {
     EXPECT_EQ(ev[0].button, 0);
     EXPECT_EQ(ev[0].time_ns, 100);
     ASSERT_EQ(dec.decode(press, 110, ev, n), ReportStatus::kOk);
-    EXPECT_EQ(n, 0);  // still down: no new event
+    EXPECT_EQ(n, 0);                                           // still down: no new event
     const std::uint8_t scroll_down[] = {1, 0x05, 0, 0, 0xff};  // button 3 too, wheel -1
     ASSERT_EQ(dec.decode(scroll_down, 120, ev, n), ReportStatus::kOk);
     ASSERT_EQ(n, 2);
@@ -149,13 +149,15 @@ TEST(ReportDecoder, ReleaseAllAfterUnplug) {
 
 TEST(ReportDescriptor, MalformedDescriptorsNameTheByte) {
     EXPECT_EQ(parse_error({0x05}), "HID report descriptor, byte 0: item runs past the end");
-    EXPECT_EQ(parse_error({0xC0}), "HID report descriptor, byte 0: End Collection without Collection");
+    EXPECT_EQ(parse_error({0xC0}),
+              "HID report descriptor, byte 0: End Collection without Collection");
     EXPECT_EQ(parse_error({0xA1, 0x01}), "HID report descriptor, byte 2: unclosed collection");
     EXPECT_EQ(parse_error({0xB4}), "HID report descriptor, byte 0: Pop without Push");
     EXPECT_EQ(parse_error({0x85, 0x00}), "HID report descriptor, byte 0: report ID must be 1..255");
     EXPECT_EQ(parse_error({0x05, 0x09, 0x09, 0x01, 0x95, 0x01, 0x81, 0x02}),
               "HID report descriptor, byte 6: Input with report size 0 or > 32");
-    EXPECT_EQ(parse_error({0xFE, 0x05, 0x00}), "HID report descriptor, byte 0: truncated long item");
+    EXPECT_EQ(parse_error({0xFE, 0x05, 0x00}),
+              "HID report descriptor, byte 0: truncated long item");
     // A keyboard: keys (page 0x07) but no button and no wheel.
     EXPECT_EQ(parse_error({0x05, 0x07, 0x19, 0xE0, 0x29, 0xE7, 0x75, 0x01, 0x95, 0x08, 0x81, 0x02}),
               "HID report descriptor, byte 12: no button (page 0x09) and no wheel (page 0x01 usage "
@@ -167,8 +169,8 @@ TEST(ReportDescriptor, MalformedDescriptorsNameTheByte) {
 
 TEST(ReportDescriptor, PushPopRestoresGlobals) {
     // Push, change the page to Generic Desktop, Pop: the button page comes back.
-    const std::vector<std::uint8_t> d = {0x05, 0x09, 0xA4, 0x05, 0x01, 0xB4, 0x09, 0x01,
-                                         0x75, 0x01, 0x95, 0x01, 0x81, 0x02, 0x75, 0x07, 0x81, 0x03};
+    const std::vector<std::uint8_t> d = {0x05, 0x09, 0xA4, 0x05, 0x01, 0xB4, 0x09, 0x01, 0x75,
+                                         0x01, 0x95, 0x01, 0x81, 0x02, 0x75, 0x07, 0x81, 0x03};
     const HandleLayout l = parse_ok(d);
     EXPECT_TRUE(l.buttons[0].present);
     EXPECT_EQ(l.input_bytes[0], 1);

@@ -46,8 +46,9 @@ TEST(CaptureFormat, DvTimingsNames) {
     EXPECT_TRUE(d.interlaced);
     ASSERT_TRUE(parse_dv_timings_name("1280x720p59.94", d));
     EXPECT_DOUBLE_EQ(d.hz, 59.94);
-    for (const char* bad : {"", "1920x1080", "1920x1080p", "1920*1080p60", "x1080p60", "1920x1080p60Hz",
-                            "0x1080p60", "1920x1080q60", "1920x1080p0", "99999x1080p60"})
+    for (const char* bad :
+         {"", "1920x1080", "1920x1080p", "1920*1080p60", "x1080p60", "1920x1080p60Hz", "0x1080p60",
+          "1920x1080q60", "1920x1080p0", "99999x1080p60"})
         EXPECT_FALSE(parse_dv_timings_name(bad, d)) << bad;
 }
 

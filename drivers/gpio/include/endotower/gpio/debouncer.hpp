@@ -18,7 +18,7 @@ namespace endotower::gpio {
 struct DebounceParams {
     hal::Nanos debounce_ns = 20 * hal::kMillisecond;
     hal::Nanos long_press_ns = 800 * hal::kMillisecond;  // 0 = no long press
-    std::uint8_t button = 0;                              // ControlEvent::button
+    std::uint8_t button = 0;                             // ControlEvent::button
 };
 
 class ButtonDebouncer {
@@ -39,9 +39,9 @@ public:
 private:
     hal::Nanos long_press_time() const;
     DebounceParams p_;
-    bool stable_ = false;      // debounced level
-    bool raw_ = false;         // level after the last edge
-    bool excursion_ = false;   // raw has left the stable level since first_edge_
+    bool stable_ = false;     // debounced level
+    bool raw_ = false;        // level after the last edge
+    bool excursion_ = false;  // raw has left the stable level since first_edge_
     bool long_sent_ = false;
     hal::Nanos first_edge_ = 0, last_edge_ = 0, press_time_ = 0;
     std::uint64_t glitches_ = 0;

@@ -25,11 +25,11 @@ struct HidHandleConfig {
 };
 
 struct HidStats {
-    std::uint64_t reports = 0;     // accepted input reports
-    std::uint64_t rejected = 0;    // short + oversized + unknown ID + empty
+    std::uint64_t reports = 0;   // accepted input reports
+    std::uint64_t rejected = 0;  // short + oversized + unknown ID + empty
     std::uint64_t short_reports = 0, oversized = 0, unknown_id = 0;
-    std::uint64_t dropped = 0;     // events lost because the ring was full
-    std::uint64_t connects = 0;    // successful opens (1 + reconnects)
+    std::uint64_t dropped = 0;   // events lost because the ring was full
+    std::uint64_t connects = 0;  // successful opens (1 + reconnects)
     std::uint64_t disconnects = 0;
 };
 

@@ -22,15 +22,15 @@ constexpr std::size_t kMaxReportBytes = 64;  // largest input report accepted (f
 // One variable field of an input report.
 struct ReportField {
     bool present = false;
-    std::uint8_t report_id = 0;   // 0 when the descriptor has no report IDs
-    std::uint16_t bit_offset = 0; // from the first byte after the report ID
-    std::uint8_t bit_size = 0;    // 1..32
-    bool is_signed = false;       // logical minimum < 0
-    bool relative = false;        // Input item's Relative flag
+    std::uint8_t report_id = 0;    // 0 when the descriptor has no report IDs
+    std::uint16_t bit_offset = 0;  // from the first byte after the report ID
+    std::uint8_t bit_size = 0;     // 1..32
+    bool is_signed = false;        // logical minimum < 0
+    bool relative = false;         // Input item's Relative flag
 };
 
 struct HandleLayout {
-    bool numbered = false;  // reports start with a report-ID byte
+    bool numbered = false;                           // reports start with a report-ID byte
     std::array<ReportField, kMaxButtons> buttons{};  // [i] = Button usage i+1
     ReportField wheel;
     // Input report payload length in bytes per report ID (without the ID byte);

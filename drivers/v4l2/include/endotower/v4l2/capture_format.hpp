@@ -15,10 +15,10 @@ enum class CaptureFormat : std::uint8_t { kYuyv, kUyvy, kNv12, kMjpeg, kBgrx };
 
 struct CaptureFormatInfo {
     CaptureFormat format;
-    std::string_view name;       // board file name: "yuyv", "uyvy", "nv12", "mjpeg", "bgrx"
-    std::uint32_t fourcc;        // V4L2_PIX_FMT_*
-    hal::PixelFormat pixel;      // what the pipeline gets (MJPEG: none, see supported)
-    bool supported;              // false: refused at start() with `why`
+    std::string_view name;   // board file name: "yuyv", "uyvy", "nv12", "mjpeg", "bgrx"
+    std::uint32_t fourcc;    // V4L2_PIX_FMT_*
+    hal::PixelFormat pixel;  // what the pipeline gets (MJPEG: none, see supported)
+    bool supported;          // false: refused at start() with `why`
     std::string_view why;
 };
 
@@ -41,7 +41,8 @@ struct DvTimingsName {
 };
 bool parse_dv_timings_name(std::string_view text, DvTimingsName& out);
 // Refresh rate of BT.656/1120 timings: pixelclock / (total width * total height).
-double dv_refresh_hz(std::uint64_t pixelclock, std::uint32_t total_width, std::uint32_t total_height);
+double dv_refresh_hz(std::uint64_t pixelclock, std::uint32_t total_width,
+                     std::uint32_t total_height);
 bool dv_matches(const DvTimingsName& want, int width, int height, bool interlaced, double hz);
 
 }  // namespace endotower::v4l2

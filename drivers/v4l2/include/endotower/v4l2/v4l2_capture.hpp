@@ -39,14 +39,14 @@ struct V4l2CaptureConfig {
 };
 
 struct CaptureStats {
-    std::uint64_t frames = 0;     // handed out by next()
-    std::uint64_t drops = 0;      // sequence gaps (the driver had no free buffer)
-    std::uint64_t skipped = 0;    // completed but superseded by a newer frame in next()
+    std::uint64_t frames = 0;   // handed out by next()
+    std::uint64_t drops = 0;    // sequence gaps (the driver had no free buffer)
+    std::uint64_t skipped = 0;  // completed but superseded by a newer frame in next()
     std::uint64_t timeouts = 0;
     std::uint64_t format_changes = 0;
-    std::uint64_t reopens = 0;    // successful reopens after the device went away
-    bool signal = false;          // false while the source reports no signal
-    bool present = false;         // false while the device node is gone
+    std::uint64_t reopens = 0;  // successful reopens after the device went away
+    bool signal = false;        // false while the source reports no signal
+    bool present = false;       // false while the device node is gone
 };
 
 class V4l2Capture final : public hal::FrameSource {
