@@ -6,8 +6,12 @@
 
 namespace endotower::app {
 
-NoSignalSource::NoSignalSource(hal::FrameSource& inner, hal::Clock& clock, Log& log, hal::Nanos after_ns)
-    : inner_(inner), clock_(clock), log_(log), after_ns_(after_ns > 0 ? after_ns : 250 * hal::kMillisecond) {}
+NoSignalSource::NoSignalSource(hal::FrameSource& inner, hal::Clock& clock, Log& log,
+                               hal::Nanos after_ns)
+    : inner_(inner),
+      clock_(clock),
+      log_(log),
+      after_ns_(after_ns > 0 ? after_ns : 250 * hal::kMillisecond) {}
 
 bool NoSignalSource::start() {
     if (!inner_.start()) return false;
@@ -26,11 +30,12 @@ void NoSignalSource::render(const hal::FrameFormat& f) {
     auto centred = [&](const char* text, double s, int y) {
         int base = 0;
         const cv::Size sz = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, s, thick, &base);
-        cv::putText(luma, text, {(f.width - sz.width) / 2, y}, cv::FONT_HERSHEY_SIMPLEX, s, cv::Scalar(255), thick,
-                    cv::LINE_AA);
+        cv::putText(luma, text, {(f.width - sz.width) / 2, y}, cv::FONT_HERSHEY_SIMPLEX, s,
+                    cv::Scalar(255), thick, cv::LINE_AA);
     };
     centred("NO SIGNAL", scale * 1.2, f.height / 2);
-    centred("check the camera and its cable", scale * 0.45, f.height / 2 + static_cast<int>(40 * scale));
+    centred("check the camera and its cable", scale * 0.45,
+            f.height / 2 + static_cast<int>(40 * scale));
 
     const int w = f.width, h = f.height;
     for (int y = 0; y < h; ++y) {
@@ -41,7 +46,8 @@ void NoSignalSource::render(const hal::FrameFormat& f) {
             case hal::PixelFormat::kUyvy: {
                 const int yoff = f.pixel_format == hal::PixelFormat::kYuyv ? 0 : 1;
                 for (int x = 0; x < w; ++x) {
-                    row[2 * x + yoff] = static_cast<std::uint8_t>(16 + l[x] * 219 / 255);  // limited range
+                    row[2 * x + yoff] =
+                        static_cast<std::uint8_t>(16 + l[x] * 219 / 255);  // limited range
                     row[2 * x + 1 - yoff] = 128;
                 }
                 break;
@@ -49,19 +55,23 @@ void NoSignalSource::render(const hal::FrameFormat& f) {
             case hal::PixelFormat::kNv12:
             case hal::PixelFormat::kGray8:
                 for (int x = 0; x < w; ++x)
-                    row[x] = f.pixel_format == hal::PixelFormat::kNv12 ? static_cast<std::uint8_t>(16 + l[x] * 219 / 255) : l[x];
+                    row[x] = f.pixel_format == hal::PixelFormat::kNv12
+                                 ? static_cast<std::uint8_t>(16 + l[x] * 219 / 255)
+                                 : l[x];
                 break;
             case hal::PixelFormat::kBgr24:
             case hal::PixelFormat::kRgb24:
                 for (int x = 0; x < w; ++x) row[3 * x] = row[3 * x + 1] = row[3 * x + 2] = l[x];
                 break;
             case hal::PixelFormat::kBgra32:
-                for (int x = 0; x < w; ++x) row[4 * x] = row[4 * x + 1] = row[4 * x + 2] = l[x], row[4 * x + 3] = 255;
+                for (int x = 0; x < w; ++x)
+                    row[4 * x] = row[4 * x + 1] = row[4 * x + 2] = l[x], row[4 * x + 3] = 255;
                 break;
         }
     }
     if (f.pixel_format == hal::PixelFormat::kNv12)  // neutral chroma
-        std::memset(card_.data() + static_cast<std::size_t>(f.stride) * h, 128, card_.size() - static_cast<std::size_t>(f.stride) * h);
+        std::memset(card_.data() + static_cast<std::size_t>(f.stride) * h, 128,
+                    card_.size() - static_cast<std::size_t>(f.stride) * h);
 }
 
 hal::SourceStatus NoSignalSource::next(hal::Frame& out, hal::Nanos timeout_ns) {
@@ -79,7 +89,9 @@ hal::SourceStatus NoSignalSource::next(hal::Frame& out, hal::Nanos timeout_ns) {
         return st;
     }
     if (st != hal::SourceStatus::kTimeout || now - last_frame_ns_ < after_ns_) return st;
-    if (!showing_) log_.write(LogLevel::kWarning, "no signal from the capture input; showing the no-signal screen");
+    if (!showing_)
+        log_.write(LogLevel::kWarning,
+                   "no signal from the capture input; showing the no-signal screen");
     showing_ = true;
     if (!(card_format_ == inner_.format())) return st;  // a format change is on its way
     out = hal::Frame{};

@@ -6,10 +6,15 @@
 
 namespace endotower::app {
 
-TestPatternStage::TestPatternStage(std::vector<std::string> prompts) : prompts_(std::move(prompts)) {}
+TestPatternStage::TestPatternStage(std::vector<std::string> prompts)
+    : prompts_(std::move(prompts)) {}
 
-hal::Rect TestPatternStage::bars_rect(int w, int h) { return {0, h - h / 12, w, h / 12}; }
-hal::Rect TestPatternStage::banner_rect(int w, int h) { return {w / 8, h / 16, w - w / 4, h / 10}; }
+hal::Rect TestPatternStage::bars_rect(int w, int h) {
+    return {0, h - h / 12, w, h / 12};
+}
+hal::Rect TestPatternStage::banner_rect(int w, int h) {
+    return {w / 8, h / 16, w - w / 4, h / 10};
+}
 
 void TestPatternStage::configure(const hal::FrameFormat& format) {
     width_ = format.width;
@@ -21,8 +26,9 @@ void TestPatternStage::configure(const hal::FrameFormat& format) {
     for (const std::string& p : prompts_) {
         // Dark translucent box, white text: readable over any video.
         cv::Mat rgba(b.height, b.width, CV_8UC4, cv::Scalar(0, 0, 0, 200));
-        cv::putText(rgba, "ENDOTOWER SELFTEST", {b.height / 6, b.height * 2 / 5}, cv::FONT_HERSHEY_SIMPLEX,
-                    0.8 * scale, cv::Scalar(255, 255, 0, 255), thick, cv::LINE_AA);
+        cv::putText(rgba, "ENDOTOWER SELFTEST", {b.height / 6, b.height * 2 / 5},
+                    cv::FONT_HERSHEY_SIMPLEX, 0.8 * scale, cv::Scalar(255, 255, 0, 255), thick,
+                    cv::LINE_AA);
         cv::putText(rgba, p, {b.height / 6, b.height * 5 / 6}, cv::FONT_HERSHEY_SIMPLEX, scale,
                     cv::Scalar(255, 255, 255, 255), thick, cv::LINE_AA);
         banners_.emplace_back(rgba.datastart, rgba.dataend);
@@ -38,10 +44,12 @@ void TestPatternStage::process(AnalysisContext& ctx) {
     }
     const int p = prompt_.load(std::memory_order_relaxed);
     const hal::Rect b = banner_rect(c.width(), c.height());
-    if (p >= 0 && p < static_cast<int>(banners_.size()) && c.width() == width_ && c.height() == height_) {
+    if (p >= 0 && p < static_cast<int>(banners_.size()) && c.width() == width_ &&
+        c.height() == height_) {
         const std::vector<std::uint8_t>& src = banners_[static_cast<std::size_t>(p)];
         for (int y = 0; y < b.height; ++y)
-            std::memcpy(c.row(b.y + y) + 4 * b.x, src.data() + static_cast<std::size_t>(y) * b.width * 4,
+            std::memcpy(c.row(b.y + y) + 4 * b.x,
+                        src.data() + static_cast<std::size_t>(y) * b.width * 4,
                         static_cast<std::size_t>(b.width) * 4);
         c.mark(b);
     }

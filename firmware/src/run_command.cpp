@@ -1,13 +1,13 @@
 // endotower run: the appliance on real devices. The board file names the capture
 // device, the handle, the display; the app's Pipeline does the rest.
+#include <sys/resource.h>
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <thread>
-
-#include <sys/resource.h>
 
 #include "board_config.hpp"
 #include "commands.hpp"
@@ -19,8 +19,8 @@
 #include "endotower/app/trace_writer.hpp"
 #include "endotower/hal/control_merge.hpp"
 #include "endotower/system/monotonic_clock.hpp"
-#include "endotower/usb/usb_hotplug.hpp"
 #include "endotower/system/syscall.hpp"
+#include "endotower/usb/usb_hotplug.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
@@ -65,15 +65,19 @@ int run_run_command(const Args& args) {
             print_run_help();
             return kExitOk;
         }
-        if (k != "--board" && k != "--trace" && k != "--seconds") return run_usage("unknown option '" + k + "'");
+        if (k != "--board" && k != "--trace" && k != "--seconds")
+            return run_usage("unknown option '" + k + "'");
         if (i + 1 >= args.size()) return run_usage("option " + k + " needs a value");
         const std::string& v = args[++i];
-        if (k == "--board") board_path = v;
-        else if (k == "--trace") trace_path = v;
+        if (k == "--board")
+            board_path = v;
+        else if (k == "--trace")
+            trace_path = v;
         else {
             char* end = nullptr;
             seconds = std::strtod(v.c_str(), &end);
-            if (v.empty() || *end != 0 || seconds <= 0) return run_usage("--seconds needs a positive number, got '" + v + "'");
+            if (v.empty() || *end != 0 || seconds <= 0)
+                return run_usage("--seconds needs a positive number, got '" + v + "'");
         }
     }
 
@@ -83,7 +87,8 @@ int run_run_command(const Args& args) {
         std::fprintf(stderr, "endotower run: %s\n", error.c_str());
         return kExitBadInput;
     }
-    if (!board.capture.present) return run_usage(board_path + ": no 'capture:' section: which device is the camera?");
+    if (!board.capture.present)
+        return run_usage(board_path + ": no 'capture:' section: which device is the camera?");
 
     system::MonotonicClock clock;
     // Probe the camera before anything else: a wrong path, a permission or a format
@@ -101,7 +106,8 @@ int run_run_command(const Args& args) {
         return kExitBadInput;
     }
     std::printf("endotower run: %s on %s %s (%s commits)\n", board.capture.device.c_str(),
-                sink.connector_name().c_str(), sink.mode_name().c_str(), sink.atomic() ? "atomic" : "legacy");
+                sink.connector_name().c_str(), sink.mode_name().c_str(),
+                sink.atomic() ? "atomic" : "legacy");
     std::fflush(stdout);
 
     hal::ControlMerge inputs;
@@ -112,7 +118,9 @@ int run_run_command(const Args& args) {
             print_device_error("run", error, board_path);
             return kExitBadInput;
         }
-        if (!handle->connected()) std::fprintf(stderr, "endotower run: handle not connected yet: %s\n", handle->last_error().c_str());
+        if (!handle->connected())
+            std::fprintf(stderr, "endotower run: handle not connected yet: %s\n",
+                         handle->last_error().c_str());
         inputs.attach(handle.get());
     }
     // USB arrivals reopen the handle at once; without libusb hotplug the handle still
@@ -122,8 +130,14 @@ int run_run_command(const Args& args) {
         hotplug = std::make_unique<usb::UsbHotplug>(static_cast<std::uint16_t>(board.handle.vid),
                                                     static_cast<std::uint16_t>(board.handle.pid));
         hid::HidHandle* h = handle.get();
-        if (!hotplug->start([h](bool arrived) { if (arrived) h->notify_arrival(); }, error)) {
-            std::fprintf(stderr, "endotower run: USB hotplug unavailable (%s); the handle reconnects through /dev/hidraw\n",
+        if (!hotplug->start(
+                [h](bool arrived) {
+                    if (arrived) h->notify_arrival();
+                },
+                error)) {
+            std::fprintf(stderr,
+                         "endotower run: USB hotplug unavailable (%s); the handle reconnects "
+                         "through /dev/hidraw\n",
                          error.c_str());
             hotplug.reset();
         }
@@ -172,7 +186,8 @@ int run_run_command(const Args& args) {
     std::thread timer;
     if (seconds > 0)
         timer = std::thread([&] {
-            const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+            const auto until =
+                std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
             while (!done.load() && std::chrono::steady_clock::now() < until)
                 std::this_thread::sleep_for(std::chrono::milliseconds(20));
             pipeline.request_stop();
@@ -180,7 +195,8 @@ int run_run_command(const Args& args) {
     auto cpu_ns = [] {
         rusage u{};
         getrusage(RUSAGE_SELF, &u);
-        return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * hal::kSecond + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1000;
+        return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * hal::kSecond +
+               (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1000;
     };
     const hal::Nanos cpu0 = cpu_ns();
     const app::PipelineSummary s = pipeline.run();
@@ -193,23 +209,32 @@ int run_run_command(const Args& args) {
     auto ms = [](hal::Nanos v) { return static_cast<double>(v) / 1e6; };
     const v4l2::CaptureStats& cs = capture.stats();
     const display::KmsSinkStats& ds = sink.stats();
-    std::printf("endotower run: %lld frames in, %lld out, %lld late; capture: %llu dropped by the driver, "
-                "%llu superseded, %llu timeouts, %llu format changes, %llu reopens\n",
-                static_cast<long long>(s.frames_in), static_cast<long long>(s.frames_out),
-                static_cast<long long>(s.late_frames), static_cast<unsigned long long>(cs.drops),
-                static_cast<unsigned long long>(cs.skipped), static_cast<unsigned long long>(cs.timeouts),
-                static_cast<unsigned long long>(cs.format_changes), static_cast<unsigned long long>(cs.reopens));
-    std::printf("latency (capture -> page flip): target %.3f ms; min %.3f, median %.3f, p99 %.3f, max %.3f ms\n",
-                ms(s.latency_target_ns), ms(s.latency_min_ns), ms(s.latency_median_ns), ms(s.latency_p99_ns),
-                ms(s.latency_max_ns));
-    std::printf("display: %lld zero-copy, %lld copied (mean copy %.3f ms, max %.3f ms), %lld dropped unplugged\n",
-                static_cast<long long>(ds.zero_copy_frames), static_cast<long long>(ds.copied_frames),
-                ds.copied_frames > 0 ? ms(ds.copy_ns_total) / static_cast<double>(ds.copied_frames) : 0.0,
-                ms(ds.copy_ns_max), static_cast<long long>(ds.dropped_frames));
+    std::printf(
+        "endotower run: %lld frames in, %lld out, %lld late; capture: %llu dropped by the driver, "
+        "%llu superseded, %llu timeouts, %llu format changes, %llu reopens\n",
+        static_cast<long long>(s.frames_in), static_cast<long long>(s.frames_out),
+        static_cast<long long>(s.late_frames), static_cast<unsigned long long>(cs.drops),
+        static_cast<unsigned long long>(cs.skipped), static_cast<unsigned long long>(cs.timeouts),
+        static_cast<unsigned long long>(cs.format_changes),
+        static_cast<unsigned long long>(cs.reopens));
+    std::printf(
+        "latency (capture -> page flip): target %.3f ms; min %.3f, median %.3f, p99 %.3f, max %.3f "
+        "ms\n",
+        ms(s.latency_target_ns), ms(s.latency_min_ns), ms(s.latency_median_ns),
+        ms(s.latency_p99_ns), ms(s.latency_max_ns));
+    std::printf(
+        "display: %lld zero-copy, %lld copied (mean copy %.3f ms, max %.3f ms), %lld dropped "
+        "unplugged\n",
+        static_cast<long long>(ds.zero_copy_frames), static_cast<long long>(ds.copied_frames),
+        ds.copied_frames > 0 ? ms(ds.copy_ns_total) / static_cast<double>(ds.copied_frames) : 0.0,
+        ms(ds.copy_ns_max), static_cast<long long>(ds.dropped_frames));
     std::printf("cpu: %.3f ms per frame shown (user + system, every thread)\n",
                 s.frames_out > 0 ? ms(cpu) / static_cast<double>(s.frames_out) : 0.0);
-    std::printf("overlay: %lld frames drawn with GLES2 (mean %.3f ms, max %.3f ms)\n", static_cast<long long>(ds.overlay_frames),
-                ds.overlay_frames > 0 ? ms(ds.overlay_ns_total) / static_cast<double>(ds.overlay_frames) : 0.0,
+    std::printf("overlay: %lld frames drawn with GLES2 (mean %.3f ms, max %.3f ms)\n",
+                static_cast<long long>(ds.overlay_frames),
+                ds.overlay_frames > 0
+                    ? ms(ds.overlay_ns_total) / static_cast<double>(ds.overlay_frames)
+                    : 0.0,
                 ms(ds.overlay_ns_max));
     if (!s.ok) {
         std::fprintf(stderr, "endotower run: %s\n", s.error.c_str());

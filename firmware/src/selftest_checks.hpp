@@ -9,18 +9,18 @@ namespace endotower::firmware {
 
 struct Check {
     enum class Result { kPass, kFail, kSkip };
-    std::string name;    // "camera present", "display mode", ...
+    std::string name;  // "camera present", "display mode", ...
     Result result = Result::kFail;
     std::string detail;  // what was measured, or what is wrong and the fix
 };
 
 struct SelftestReport {
-    std::string board;       // the board file
+    std::string board;  // the board file
     std::string board_name;
     long long started_unix = 0;
     std::vector<Check> checks;
 
-    bool passed() const;                  // no check failed
+    bool passed() const;                     // no check failed
     std::string line(const Check& c) const;  // "PASS  camera present: /dev/video0 1920x1080"
     std::string text() const;
     std::string json() const;

@@ -60,7 +60,9 @@ private:
 // kWarmup frames are not counted: they carry the mode set and the shader compilation.
 class ProbeSink final : public hal::VideoSink {
 public:
-    ProbeSink(hal::VideoSink& in, int n) : in_(in) { latency_.reserve(static_cast<std::size_t>(n)), n_ = n; }
+    ProbeSink(hal::VideoSink& in, int n) : in_(in) {
+        latency_.reserve(static_cast<std::size_t>(n)), n_ = n;
+    }
     bool configure(const hal::FrameFormat& f) override { return in_.configure(f); }
     hal::Nanos present(const hal::Frame& v, const hal::OverlayLayer* o, hal::Nanos due) override {
         const hal::Nanos t = in_.present(v, o, due);
@@ -78,7 +80,9 @@ public:
     int count() const { return count_.load(); }
     std::vector<hal::Nanos> latencies() const { return latency_; }
     double frame_rate() const {
-        return last_ns_ > first_ns_ ? static_cast<double>(last_seq_ - first_seq_) * 1e9 / static_cast<double>(last_ns_ - first_ns_) : 0;
+        return last_ns_ > first_ns_ ? static_cast<double>(last_seq_ - first_seq_) * 1e9 /
+                                          static_cast<double>(last_ns_ - first_ns_)
+                                    : 0;
     }
 
     static constexpr int kWarmup = 5;
@@ -124,16 +128,19 @@ int run_selftest_command(const Args& args) {
         const std::string& k = args[i];
         if (k == "--help" || k == "-h") {
             std::printf(
-                "usage: endotower selftest [--board FILE] [--report DIR] [--frames N] [--input-timeout S]\n\n"
+                "usage: endotower selftest [--board FILE] [--report DIR] [--frames N] "
+                "[--input-timeout S]\n\n"
                 "Checks a board for service: camera present, signal, format and frame rate; the\n"
-                "handle's button and wheel and the GPIO button (prompted on the monitor and here);\n"
+                "handle's button and wheel and the GPIO button (prompted on the monitor and "
+                "here);\n"
                 "display connected and mode set; capture -> page-flip latency over N frames;\n"
                 "calibration and gesture-model files; storage writable. A test pattern shows on\n"
                 "the monitor meanwhile. One PASS/FAIL/SKIP line per check; DIR/selftest.txt and\n"
                 "DIR/selftest.json (default DIR: the board's paths.storage). docs/selftest.md.\n\n"
                 "  --board FILE        board description (default %s)\n"
                 "  --frames N          frames for the latency and frame-rate checks (default 300)\n"
-                "  --input-timeout S   seconds to wait for each button/wheel action (default 30)\n\n"
+                "  --input-timeout S   seconds to wait for each button/wheel action (default "
+                "30)\n\n"
                 "Exit status: 0 every check passed, 1 a check failed, 2 bad usage or board file.\n",
                 a.board.c_str());
             return kExitOk;
@@ -143,11 +150,14 @@ int run_selftest_command(const Args& args) {
         if (i + 1 >= args.size()) return selftest_usage("option " + k + " needs a value");
         const std::string& v = args[++i];
         char* end = nullptr;
-        if (k == "--board") a.board = v;
-        else if (k == "--report") a.report = v;
+        if (k == "--board")
+            a.board = v;
+        else if (k == "--report")
+            a.report = v;
         else if (k == "--frames") {
             const long n = std::strtol(v.c_str(), &end, 10);
-            if (v.empty() || *end != 0 || n < 10 || n > 100000) return selftest_usage("--frames needs 10..100000, got '" + v + "'");
+            if (v.empty() || *end != 0 || n < 10 || n > 100000)
+                return selftest_usage("--frames needs 10..100000, got '" + v + "'");
             a.frames = static_cast<int>(n);
         } else {
             a.input_timeout_s = std::strtod(v.c_str(), &end);
@@ -185,9 +195,9 @@ int run_selftest_command(const Args& args) {
     // Display first: the test pattern shows while everything else is checked.
     system::MonotonicClock clock;
     display::KmsSink sink(display_config(board), clock);
-    const std::vector<std::string> prompts = {"CHECKING CAMERA AND LATENCY - PLEASE WAIT",
-                                              "PRESS AND RELEASE THE HANDLE BUTTON", "TURN THE HANDLE WHEEL",
-                                              "PRESS AND RELEASE THE GPIO BUTTON", "DONE"};
+    const std::vector<std::string> prompts = {
+        "CHECKING CAMERA AND LATENCY - PLEASE WAIT", "PRESS AND RELEASE THE HANDLE BUTTON",
+        "TURN THE HANDLE WHEEL", "PRESS AND RELEASE THE GPIO BUTTON", "DONE"};
     app::TestPatternStage pattern(prompts);
     bool display_ok = sink.open();
     std::unique_ptr<PatternFrame> still;
@@ -212,7 +222,9 @@ int run_selftest_command(const Args& args) {
         pattern.configure(still->frame.format);
         const bool shown = sink.configure(still->frame.format) && show_still(0) > 0;
         add({"display mode set", shown ? R::kPass : R::kFail,
-             shown ? sink.mode_name() + (sink.atomic() ? ", atomic" : ", legacy") + ", test pattern shown" : sink.error()});
+             shown ? sink.mode_name() + (sink.atomic() ? ", atomic" : ", legacy") +
+                         ", test pattern shown"
+                   : sink.error()});
         display_ok = shown;
     }
 
@@ -227,7 +239,8 @@ int run_selftest_command(const Args& args) {
             handle.reset();
         } else {
             // hidapi opens it from its own thread: give it a moment.
-            for (int i = 0; i < 40 && !handle->connected(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            for (int i = 0; i < 40 && !handle->connected(); ++i)
+                std::this_thread::sleep_for(std::chrono::milliseconds(50));
             if (handle->connected()) {
                 char ids[32];
                 std::snprintf(ids, sizeof ids, "HID %04x:%04x", board.handle.vid, board.handle.pid);
@@ -235,7 +248,8 @@ int run_selftest_command(const Args& args) {
                 handle_watch = std::make_unique<WatchedInput>(*handle);
                 merge.attach(handle_watch.get());
             } else {
-                add({"handle present", R::kFail, fail_fix(handle->last_error()) + "; fix: plug the handle in"});
+                add({"handle present", R::kFail,
+                     fail_fix(handle->last_error()) + "; fix: plug the handle in"});
             }
         }
     }
@@ -248,7 +262,8 @@ int run_selftest_command(const Args& args) {
             add({"gpio button present", R::kFail, fail_fix(error)});
             button.reset();
         } else {
-            add({"gpio button present", R::kPass, board.button.chip + " line " + std::to_string(board.button.line)});
+            add({"gpio button present", R::kPass,
+                 board.button.chip + " line " + std::to_string(board.button.line)});
             button_watch = std::make_unique<WatchedInput>(*button);
             merge.attach(button_watch.get());
         }
@@ -269,7 +284,8 @@ int run_selftest_command(const Args& args) {
             add({"camera present", R::kPass, board.capture.device});
             hal::Frame f;
             hal::SourceStatus st = hal::SourceStatus::kTimeout;
-            for (int i = 0; i < 3 && st != hal::SourceStatus::kFrame && st != hal::SourceStatus::kError; ++i) {
+            for (int i = 0;
+                 i < 3 && st != hal::SourceStatus::kFrame && st != hal::SourceStatus::kError; ++i) {
                 st = capture->next(f, hal::kSecond);
                 if (st == hal::SourceStatus::kFormatChange) st = hal::SourceStatus::kTimeout;
             }
@@ -277,14 +293,17 @@ int run_selftest_command(const Args& args) {
             cam_format = capture->format();
             period = capture->frame_period();
             add({"camera signal", st == hal::SourceStatus::kFrame ? R::kPass : R::kFail,
-                 st == hal::SourceStatus::kFrame ? "frames arriving"
-                                                 : "no frame in 3 s; fix: check the video source is on and its cable"});
-            const bool fmt_ok = cam_format.pixel_format == v4l2::info(capture_config(board).format).pixel &&
-                                (!board.capture.dv_timings.empty() ||
-                                 (cam_format.width == board.capture.width && cam_format.height == board.capture.height));
+                 st == hal::SourceStatus::kFrame
+                     ? "frames arriving"
+                     : "no frame in 3 s; fix: check the video source is on and its cable"});
+            const bool fmt_ok =
+                cam_format.pixel_format == v4l2::info(capture_config(board).format).pixel &&
+                (!board.capture.dv_timings.empty() || (cam_format.width == board.capture.width &&
+                                                       cam_format.height == board.capture.height));
             add({"camera format", fmt_ok ? R::kPass : R::kFail,
                  std::to_string(cam_format.width) + "x" + std::to_string(cam_format.height) + " " +
-                     std::string(hal::to_string(cam_format.pixel_format)) + fmt(", %.2f Hz nominal", period > 0 ? 1e9 / static_cast<double>(period) : 0) +
+                     std::string(hal::to_string(cam_format.pixel_format)) +
+                     fmt(", %.2f Hz nominal", period > 0 ? 1e9 / static_cast<double>(period) : 0) +
                      (fmt_ok ? "" : "; board file asks for " + board.capture.format)});
             camera_ok = st == hal::SourceStatus::kFrame;
             capture->stop();
@@ -304,19 +323,22 @@ int run_selftest_command(const Args& args) {
     }
     if (button_watch) wanted.push_back({3, button_watch.get(), "gpio button", false});
     auto seen = [](const Prompt& p) {
-        return p.wheel ? p.input->wheel.load() != 0 : p.input->pressed.load() && p.input->released.load();
+        return p.wheel ? p.input->wheel.load() != 0
+                       : p.input->pressed.load() && p.input->released.load();
     };
     auto ask = [&](const Prompt& p) {
-        std::printf(">>> %s (%.0f s)\n", prompts[static_cast<std::size_t>(p.index)].c_str(), a.input_timeout_s);
+        std::printf(">>> %s (%.0f s)\n", prompts[static_cast<std::size_t>(p.index)].c_str(),
+                    a.input_timeout_s);
         std::fflush(stdout);
         pattern.set_prompt(p.index);
     };
     std::vector<Check> input_checks;
     auto record_input = [&](const Prompt& p, bool ok) {
-        input_checks.push_back({p.check, ok ? R::kPass : R::kFail,
-                                ok ? (p.wheel ? "wheel turned " + std::to_string(p.input->wheel.load()) + " detents"
-                                              : "pressed and released")
-                                   : fmt("nothing within %.0f s", a.input_timeout_s)});
+        input_checks.push_back(
+            {p.check, ok ? R::kPass : R::kFail,
+             ok ? (p.wheel ? "wheel turned " + std::to_string(p.input->wheel.load()) + " detents"
+                           : "pressed and released")
+                : fmt("nothing within %.0f s", a.input_timeout_s)});
     };
 
     if (camera_ok && display_ok) {
@@ -333,11 +355,13 @@ int run_selftest_command(const Args& args) {
         std::thread controller([&] {
             // Generous: a real board shows 300 frames in 5 s; an emulated one needs ~1 s each.
             const auto limit = Clock::now() + std::chrono::seconds(20 + a.frames);
-            while (probe.count() < a.frames && Clock::now() < limit) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+            while (probe.count() < a.frames && Clock::now() < limit)
+                std::this_thread::sleep_for(std::chrono::milliseconds(20));
             for (const Prompt& p : wanted) {
                 ask(p);
                 const auto until = Clock::now() + std::chrono::duration<double>(a.input_timeout_s);
-                while (!seen(p) && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+                while (!seen(p) && Clock::now() < until)
+                    std::this_thread::sleep_for(std::chrono::milliseconds(20));
                 record_input(p, seen(p));
             }
             pattern.set_prompt(4);
@@ -346,22 +370,30 @@ int run_selftest_command(const Args& args) {
         const app::PipelineSummary s = pipeline.run();
         controller.join();
         std::vector<hal::Nanos> lat = probe.latencies();
-        const hal::Nanos budget = board.latency_budget_ms > 0 ? static_cast<hal::Nanos>(board.latency_budget_ms * 1e6)
-                                                              : period + 2 * hal::kMillisecond;
+        const hal::Nanos budget = board.latency_budget_ms > 0
+                                      ? static_cast<hal::Nanos>(board.latency_budget_ms * 1e6)
+                                      : period + 2 * hal::kMillisecond;
         if (lat.size() < 10) {
-            add({"frame rate", R::kFail, "too few frames shown (" + std::to_string(lat.size()) + "): " + s.error});
+            add({"frame rate", R::kFail,
+                 "too few frames shown (" + std::to_string(lat.size()) + "): " + s.error});
             add({"latency", R::kFail, "too few frames shown"});
         } else {
-            const double rate = probe.frame_rate(), nominal = period > 0 ? 1e9 / static_cast<double>(period) : 0;
+            const double rate = probe.frame_rate(),
+                         nominal = period > 0 ? 1e9 / static_cast<double>(period) : 0;
             const bool rate_ok = nominal > 0 && std::abs(rate - nominal) <= 0.02 * nominal;
             add({"frame rate", rate_ok ? R::kPass : R::kFail,
-                 fmt("%.2f Hz measured from kernel timestamps, %.2f Hz nominal (within 2 %%)", rate, nominal)});
+                 fmt("%.2f Hz measured from kernel timestamps, %.2f Hz nominal (within 2 %%)", rate,
+                     nominal)});
             std::sort(lat.begin(), lat.end());
-            auto q = [&](double p) { return static_cast<double>(lat[static_cast<std::size_t>(p * static_cast<double>(lat.size() - 1))]) / 1e6; };
+            auto q = [&](double p) {
+                return static_cast<double>(
+                           lat[static_cast<std::size_t>(p * static_cast<double>(lat.size() - 1))]) /
+                       1e6;
+            };
             const bool lat_ok = lat.front() > 0 && q(0.99) <= static_cast<double>(budget) / 1e6;
             add({"latency", lat_ok ? R::kPass : R::kFail,
-                 fmt("capture -> page flip over %.0f frames: median %.2f, p99 %.2f, max %.2f ms", static_cast<double>(lat.size()), q(0.5),
-                     q(0.99), q(1.0)) +
+                 fmt("capture -> page flip over %.0f frames: median %.2f, p99 %.2f, max %.2f ms",
+                     static_cast<double>(lat.size()), q(0.5), q(0.99), q(1.0)) +
                      fmt(" (budget %.2f ms)", static_cast<double>(budget) / 1e6)});
         }
     } else {
@@ -388,8 +420,8 @@ int run_selftest_command(const Args& args) {
         std::fprintf(stderr, "endotower selftest: cannot write the report: %s\n", error.c_str());
         return kExitFailure;
     }
-    std::printf("overall: %s\nreport: %s/selftest.txt, %s/selftest.json\n", report.passed() ? "PASS" : "FAIL",
-                a.report.c_str(), a.report.c_str());
+    std::printf("overall: %s\nreport: %s/selftest.txt, %s/selftest.json\n",
+                report.passed() ? "PASS" : "FAIL", a.report.c_str(), a.report.c_str());
     return report.passed() ? kExitOk : kExitFailure;
 }
 

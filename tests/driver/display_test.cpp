@@ -75,10 +75,12 @@ struct DumbDmabuf {
         drm_mode_map_dumb m{};
         m.handle = c.handle;
         if (drmIoctl(fd, DRM_IOCTL_MODE_MAP_DUMB, &m) != 0) return false;
-        void* p = mmap(nullptr, c.size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, static_cast<off_t>(m.offset));
+        void* p = mmap(nullptr, c.size, PROT_READ | PROT_WRITE, MAP_SHARED, fd,
+                       static_cast<off_t>(m.offset));
         if (p == MAP_FAILED) return false;
         map = static_cast<std::uint8_t*>(p);
-        for (std::size_t i = 0; i < c.size; i += 4) map[i] = b, map[i + 1] = g, map[i + 2] = r, map[i + 3] = 255;
+        for (std::size_t i = 0; i < c.size; i += 4)
+            map[i] = b, map[i + 1] = g, map[i + 2] = r, map[i + 3] = 255;
         if (drmPrimeHandleToFD(fd, c.handle, DRM_CLOEXEC | DRM_RDWR, &dmabuf) != 0) return false;
         frame.format = {kW, kH, static_cast<int>(c.pitch), hal::PixelFormat::kBgra32};
         frame.data = map;
@@ -101,7 +103,8 @@ const std::uint8_t* px_at(const std::uint8_t* wb, int stride, int x, int y) {
 class DisplayTest : public ::testing::Test {
 protected:
     void SetUp() override {
-        if (access("/dev/dri/card0", F_OK) != 0) GTEST_SKIP() << "no /dev/dri/card0: run in the guest with vkms";
+        if (access("/dev/dri/card0", F_OK) != 0)
+            GTEST_SKIP() << "no /dev/dri/card0: run in the guest with vkms";
     }
     system::MonotonicClock clock_;
 };
@@ -119,7 +122,8 @@ TEST_F(DisplayTest, UnknownConnectorNamesTheChoices) {
     c.connector = "HDMI-A-7";
     KmsSink sink(c, clock_);
     EXPECT_FALSE(sink.open());
-    EXPECT_NE(sink.error().find("no connector named 'HDMI-A-7'"), std::string::npos) << sink.error();
+    EXPECT_NE(sink.error().find("no connector named 'HDMI-A-7'"), std::string::npos)
+        << sink.error();
     EXPECT_NE(sink.error().find("Virtual-1 (connected)"), std::string::npos) << sink.error();
 }
 
@@ -140,12 +144,13 @@ TEST_F(DisplayTest, FrameAndOverlayReadBackThroughWriteback) {
     for (int y = 0; y < 720; ++y)
         for (int x = 0; x < 1280; ++x) {
             std::uint8_t* p = &img.px[static_cast<std::size_t>(y) * 1280 * 4 + 4 * x];
-            p[0] = static_cast<std::uint8_t>(x), p[1] = static_cast<std::uint8_t>(y), p[2] = 77, p[3] = 255;
+            p[0] = static_cast<std::uint8_t>(x), p[1] = static_cast<std::uint8_t>(y), p[2] = 77,
+            p[3] = 255;
         }
     ASSERT_TRUE(sink.configure(img.frame.format)) << sink.error();
     Overlay ov;
-    ov.fill({100, 50, 40, 30}, 255, 0, 0, 255);       // opaque red, over the black border
-    ov.fill({700, 500, 20, 10}, 0, 0, 255, 128);      // half blue over the frame
+    ov.fill({100, 50, 40, 30}, 255, 0, 0, 255);   // opaque red, over the black border
+    ov.fill({700, 500, 20, 10}, 0, 0, 255, 128);  // half blue over the frame
     ASSERT_TRUE(sink.request_readback());
     ASSERT_GT(sink.present(img.frame, &ov.layer, clock_.now()), 0) << sink.error();
     int stride = 0;

@@ -134,7 +134,8 @@ bool GlesOverlay::draw(const hal::OverlayLayer* layer, int buffer_age) {
     glDisable(GL_BLEND);
     clear(buffer_age);
     // This draw becomes history_[0].
-    for (int k = kHistory - 1; k > 0; --k) history_[static_cast<std::size_t>(k)] = history_[static_cast<std::size_t>(k - 1)];
+    for (int k = kHistory - 1; k > 0; --k)
+        history_[static_cast<std::size_t>(k)] = history_[static_cast<std::size_t>(k - 1)];
     history_[0].count = 0;
     history_size_ = std::min(history_size_ + 1, kHistory);
     if (layer == nullptr || layer->empty() || layer->rgba == nullptr)
@@ -153,10 +154,12 @@ bool GlesOverlay::draw(const hal::OverlayLayer* layer, int buffer_age) {
         if (x1 <= x0 || y1 <= y0) continue;
         clipped[n++] = {x0, y0, x1 - x0, y1 - y0};
         history_[0].rects[history_[0].count++] = clipped[n - 1];
-        const std::uint8_t* first = layer->rgba + static_cast<std::ptrdiff_t>(y0) * layer->stride + 4 * x0;
+        const std::uint8_t* first =
+            layer->rgba + static_cast<std::ptrdiff_t>(y0) * layer->stride + 4 * x0;
         if (unpack_subimage_ && layer->stride % 4 == 0) {
             glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, layer->stride / 4);
-            glTexSubImage2D(GL_TEXTURE_2D, 0, x0, y0, x1 - x0, y1 - y0, GL_RGBA, GL_UNSIGNED_BYTE, first);
+            glTexSubImage2D(GL_TEXTURE_2D, 0, x0, y0, x1 - x0, y1 - y0, GL_RGBA, GL_UNSIGNED_BYTE,
+                            first);
             glPixelStorei(GL_UNPACK_ROW_LENGTH_EXT, 0);
         } else {
             for (int y = y0; y < y1; ++y)

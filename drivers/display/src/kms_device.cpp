@@ -82,7 +82,8 @@ bool PlaneInfo::takes(std::uint32_t fourcc) const {
 
 std::string connector_name(const drmModeConnector& c) {
     const char* type = drmModeGetConnectorTypeName(c.connector_type);
-    return std::string(type != nullptr ? type : "Unknown") + "-" + std::to_string(c.connector_type_id);
+    return std::string(type != nullptr ? type : "Unknown") + "-" +
+           std::to_string(c.connector_type_id);
 }
 
 double mode_refresh(const drmModeModeInfo& m) {
@@ -92,13 +93,20 @@ double mode_refresh(const drmModeModeInfo& m) {
 
 std::uint32_t drm_fourcc(int f) {
     switch (static_cast<hal::PixelFormat>(f)) {
-        case hal::PixelFormat::kBgr24: return DRM_FORMAT_RGB888;   // memory B G R
-        case hal::PixelFormat::kRgb24: return DRM_FORMAT_BGR888;   // memory R G B
-        case hal::PixelFormat::kBgra32: return DRM_FORMAT_XRGB8888;
-        case hal::PixelFormat::kYuyv: return DRM_FORMAT_YUYV;
-        case hal::PixelFormat::kUyvy: return DRM_FORMAT_UYVY;
-        case hal::PixelFormat::kNv12: return DRM_FORMAT_NV12;
-        case hal::PixelFormat::kGray8: return 0;  // R8 would show red
+        case hal::PixelFormat::kBgr24:
+            return DRM_FORMAT_RGB888;  // memory B G R
+        case hal::PixelFormat::kRgb24:
+            return DRM_FORMAT_BGR888;  // memory R G B
+        case hal::PixelFormat::kBgra32:
+            return DRM_FORMAT_XRGB8888;
+        case hal::PixelFormat::kYuyv:
+            return DRM_FORMAT_YUYV;
+        case hal::PixelFormat::kUyvy:
+            return DRM_FORMAT_UYVY;
+        case hal::PixelFormat::kNv12:
+            return DRM_FORMAT_NV12;
+        case hal::PixelFormat::kGray8:
+            return 0;  // R8 would show red
     }
     return 0;
 }
@@ -110,8 +118,12 @@ bool KmsDevice::open(const std::string& path, const std::string& want, int width
     if (fd < 0) {
         const int e = errno;
         error = system::errno_message("open", path, e);
-        if (e == ENOENT) error += ": no such display card; is the display driver loaded? (board file: display.card)";
-        if (e == EACCES) error += ": add the service user to the 'video' group (board/common/99-endotower.rules)";
+        if (e == ENOENT)
+            error +=
+                ": no such display card; is the display driver loaded? (board file: display.card)";
+        if (e == EACCES)
+            error +=
+                ": add the service user to the 'video' group (board/common/99-endotower.rules)";
         return false;
     }
     drmSetClientCap(fd, DRM_CLIENT_CAP_UNIVERSAL_PLANES, 1);
@@ -123,7 +135,8 @@ bool KmsDevice::open(const std::string& path, const std::string& want, int width
 
     Ptr<drmModeRes> res(drmModeGetResources(fd));
     if (!res) {
-        error = system::errno_message("drmModeGetResources", path, errno) + ": not a KMS display device";
+        error = system::errno_message("drmModeGetResources", path, errno) +
+                ": not a KMS display device";
         return false;
     }
     std::string seen;
@@ -146,8 +159,10 @@ bool KmsDevice::open(const std::string& path, const std::string& want, int width
         if (want.empty() ? c->connection == DRM_MODE_CONNECTED : name == want) conn = std::move(c);
     }
     if (!conn) {
-        error = path + ": " + (want.empty() ? "no connected monitor" : "no connector named '" + want + "'") +
-                " (connectors: " + (seen.empty() ? "none" : seen) + "; board file: display.connector)";
+        error = path + ": " +
+                (want.empty() ? "no connected monitor" : "no connector named '" + want + "'") +
+                " (connectors: " + (seen.empty() ? "none" : seen) +
+                "; board file: display.connector)";
         return false;
     }
     connector_id = conn->connector_id;
@@ -162,14 +177,15 @@ bool KmsDevice::open(const std::string& path, const std::string& want, int width
     for (int i = 0; i < conn->count_modes; ++i) {
         const drmModeModeInfo& m = conn->modes[i];
         if (m.hdisplay != width || m.vdisplay != height) continue;
-        const double d = std::fabs(mode_refresh(m) - refresh_hz) - ((m.type & DRM_MODE_TYPE_PREFERRED) ? 1e-3 : 0);
+        const double d = std::fabs(mode_refresh(m) - refresh_hz) -
+                         ((m.type & DRM_MODE_TYPE_PREFERRED) ? 1e-3 : 0);
         if (d < best_diff) best_diff = d, best = i;
     }
     if (best < 0 || best_diff > 0.6) {
         char want_mode[64];
         std::snprintf(want_mode, sizeof want_mode, "%dx%d@%.2f", width, height, refresh_hz);
-        error = path + ": connector " + connector_name + " has no mode " + want_mode + " (modes: " +
-                mode_list(*conn) + "; board file: display.mode)";
+        error = path + ": connector " + connector_name + " has no mode " + want_mode +
+                " (modes: " + mode_list(*conn) + "; board file: display.mode)";
         return false;
     }
     mode = conn->modes[best];
@@ -201,8 +217,10 @@ bool KmsDevice::open(const std::string& path, const std::string& want, int width
         if (Props{fd, p->plane_id, DRM_MODE_OBJECT_PLANE}.id("type", &type) == 0) continue;
         PlaneInfo info;
         fill_plane(fd, *p, info);
-        if (type == DRM_PLANE_TYPE_PRIMARY && primary.id == 0) primary = info;
-        else if (type == DRM_PLANE_TYPE_OVERLAY && overlay.id == 0 && info.takes(DRM_FORMAT_ARGB8888))
+        if (type == DRM_PLANE_TYPE_PRIMARY && primary.id == 0)
+            primary = info;
+        else if (type == DRM_PLANE_TYPE_OVERLAY && overlay.id == 0 &&
+                 info.takes(DRM_FORMAT_ARGB8888))
             overlay = info;
     }
     if (primary.id == 0) {

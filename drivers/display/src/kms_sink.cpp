@@ -31,7 +31,9 @@ hal::Nanos mono_now() {
     return static_cast<hal::Nanos>(ts.tv_sec) * hal::kSecond + ts.tv_nsec;
 }
 
-void log_line(const std::string& m) { std::fprintf(stderr, "endotower: display: %s\n", m.c_str()); }
+void log_line(const std::string& m) {
+    std::fprintf(stderr, "endotower: display: %s\n", m.c_str());
+}
 
 // An XRGB8888 dumb buffer, mapped, with its framebuffer.
 struct DumbBuffer {
@@ -45,7 +47,8 @@ struct DumbBuffer {
         c.height = static_cast<std::uint32_t>(h);
         c.bpp = 32;
         if (drmIoctl(fd, DRM_IOCTL_MODE_CREATE_DUMB, &c) != 0) {
-            error = system::errno_message("DRM_IOCTL_MODE_CREATE_DUMB", std::to_string(w) + "x" + std::to_string(h), errno);
+            error = system::errno_message("DRM_IOCTL_MODE_CREATE_DUMB",
+                                          std::to_string(w) + "x" + std::to_string(h), errno);
             return false;
         }
         handle = c.handle;
@@ -57,7 +60,8 @@ struct DumbBuffer {
             error = system::errno_message("DRM_IOCTL_MODE_MAP_DUMB", "dumb buffer", errno);
             return false;
         }
-        void* p = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, static_cast<off_t>(m.offset));
+        void* p = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd,
+                       static_cast<off_t>(m.offset));
         if (p == MAP_FAILED) {
             error = system::errno_message("mmap", "dumb buffer", errno);
             return false;
@@ -65,7 +69,8 @@ struct DumbBuffer {
         map = static_cast<std::uint8_t*>(p);
         std::memset(map, 0, size);
         const std::uint32_t handles[4] = {handle}, pitches[4] = {pitch}, offsets[4] = {0};
-        if (drmModeAddFB2(fd, c.width, c.height, DRM_FORMAT_XRGB8888, handles, pitches, offsets, &fb, 0) != 0) {
+        if (drmModeAddFB2(fd, c.width, c.height, DRM_FORMAT_XRGB8888, handles, pitches, offsets,
+                          &fb, 0) != 0) {
             error = system::errno_message("drmModeAddFB2", "XRGB8888 dumb buffer", errno);
             return false;
         }
@@ -183,7 +188,8 @@ struct KmsSink::Impl {
     std::uint32_t copy_fb(const hal::Frame& f);
     std::uint32_t overlay_fb(gbm_bo* bo);
     void add_planes(std::uint32_t video_fb, int src_w, int src_h, std::uint32_t overlay_fb);
-    int commit_atomic(std::uint32_t video_fb, int src_w, int src_h, std::uint32_t overlay_fb, bool test_only);
+    int commit_atomic(std::uint32_t video_fb, int src_w, int src_h, std::uint32_t overlay_fb,
+                      bool test_only);
     int commit_legacy(std::uint32_t video_fb, std::uint32_t overlay_fb);
     bool wait_flip();
     void lost_monitor(const std::string& why);
@@ -214,18 +220,31 @@ KmsSink::Impl::~Impl() {
 bool KmsSink::Impl::setup_egl() {
     const int w = dev.mode.hdisplay, h = dev.mode.vdisplay;
     gbm = gbm_create_device(dev.fd);
-    if (gbm == nullptr) return fail(dev.card + ": gbm_create_device failed (no GBM backend for this driver)");
-    gsurf = gbm_surface_create(gbm, static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h), GBM_FORMAT_ARGB8888,
-                               GBM_BO_USE_SCANOUT | GBM_BO_USE_RENDERING);
-    if (gsurf == nullptr) return fail(dev.card + ": cannot create an ARGB8888 scanout surface with GBM");
-    auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+    if (gbm == nullptr)
+        return fail(dev.card + ": gbm_create_device failed (no GBM backend for this driver)");
+    gsurf = gbm_surface_create(gbm, static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h),
+                               GBM_FORMAT_ARGB8888, GBM_BO_USE_SCANOUT | GBM_BO_USE_RENDERING);
+    if (gsurf == nullptr)
+        return fail(dev.card + ": cannot create an ARGB8888 scanout surface with GBM");
+    auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+        eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (get_display == nullptr) return fail("EGL: no eglGetPlatformDisplayEXT");
     egl_display = get_display(EGL_PLATFORM_GBM_KHR, gbm, nullptr);
     if (egl_display == EGL_NO_DISPLAY || !eglInitialize(egl_display, nullptr, nullptr))
         return fail(dev.card + ": EGL cannot initialise on GBM");
     eglBindAPI(EGL_OPENGL_ES_API);
-    const EGLint attribs[] = {EGL_SURFACE_TYPE, EGL_WINDOW_BIT, EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8,
-                              EGL_BLUE_SIZE, 8, EGL_ALPHA_SIZE, 8, EGL_RENDERABLE_TYPE, EGL_OPENGL_ES2_BIT,
+    const EGLint attribs[] = {EGL_SURFACE_TYPE,
+                              EGL_WINDOW_BIT,
+                              EGL_RED_SIZE,
+                              8,
+                              EGL_GREEN_SIZE,
+                              8,
+                              EGL_BLUE_SIZE,
+                              8,
+                              EGL_ALPHA_SIZE,
+                              8,
+                              EGL_RENDERABLE_TYPE,
+                              EGL_OPENGL_ES2_BIT,
                               EGL_NONE};
     EGLConfig configs[64];
     EGLint n = 0;
@@ -233,13 +252,15 @@ bool KmsSink::Impl::setup_egl() {
     EGLConfig config = nullptr;
     for (EGLint i = 0; i < n && config == nullptr; ++i) {
         EGLint id = 0;
-        if (eglGetConfigAttrib(egl_display, configs[i], EGL_NATIVE_VISUAL_ID, &id) && id == GBM_FORMAT_ARGB8888)
+        if (eglGetConfigAttrib(egl_display, configs[i], EGL_NATIVE_VISUAL_ID, &id) &&
+            id == GBM_FORMAT_ARGB8888)
             config = configs[i];
     }
     if (config == nullptr) return fail("EGL: no ARGB8888 config for GBM");
     const EGLint ctx_attribs[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
     egl_context = eglCreateContext(egl_display, config, EGL_NO_CONTEXT, ctx_attribs);
-    egl_surface = eglCreateWindowSurface(egl_display, config, reinterpret_cast<EGLNativeWindowType>(gsurf), nullptr);
+    egl_surface = eglCreateWindowSurface(egl_display, config,
+                                         reinterpret_cast<EGLNativeWindowType>(gsurf), nullptr);
     if (egl_context == EGL_NO_CONTEXT || egl_surface == EGL_NO_SURFACE ||
         !eglMakeCurrent(egl_display, egl_surface, egl_surface, egl_context))
         return fail("EGL: cannot create a GLES2 context on the GBM surface");
@@ -269,19 +290,23 @@ std::uint32_t KmsSink::Impl::import_fb(const hal::Frame& f) {
     if (im.fb != 0 && im.dmabuf == f.dmabuf_fd) return im.fb;
     std::uint32_t handle = 0;
     if (drmPrimeFDToHandle(dev.fd, f.dmabuf_fd, &handle) != 0) {
-        log_line(system::errno_message("drmPrimeFDToHandle", dev.card, errno) + "; copying frames instead");
+        log_line(system::errno_message("drmPrimeFDToHandle", dev.card, errno) +
+                 "; copying frames instead");
         return 0;
     }
-    std::uint32_t handles[4] = {handle}, pitches[4] = {static_cast<std::uint32_t>(f.format.stride)}, offsets[4] = {0};
+    std::uint32_t handles[4] = {handle}, pitches[4] = {static_cast<std::uint32_t>(f.format.stride)},
+                  offsets[4] = {0};
     if (f.format.pixel_format == hal::PixelFormat::kNv12) {
         handles[1] = handle;
         pitches[1] = pitches[0];
         offsets[1] = pitches[0] * static_cast<std::uint32_t>(f.format.height);
     }
     std::uint32_t fb = 0;
-    if (drmModeAddFB2(dev.fd, static_cast<std::uint32_t>(f.format.width), static_cast<std::uint32_t>(f.format.height),
-                      fourcc, handles, pitches, offsets, &fb, 0) != 0) {
-        log_line(system::errno_message("drmModeAddFB2", "capture DMABUF", errno) + "; copying frames instead");
+    if (drmModeAddFB2(dev.fd, static_cast<std::uint32_t>(f.format.width),
+                      static_cast<std::uint32_t>(f.format.height), fourcc, handles, pitches,
+                      offsets, &fb, 0) != 0) {
+        log_line(system::errno_message("drmModeAddFB2", "capture DMABUF", errno) +
+                 "; copying frames instead");
         drm_gem_close c{};
         c.handle = handle;
         drmIoctl(dev.fd, DRM_IOCTL_GEM_CLOSE, &c);
@@ -302,13 +327,28 @@ std::uint32_t KmsSink::Impl::copy_fb(const hal::Frame& f) {
     cv::Mat dst = screen(cv::Rect(x0, y0, w, h));
     const std::size_t step = static_cast<std::size_t>(f.format.stride);
     switch (f.format.pixel_format) {
-        case hal::PixelFormat::kYuyv: cv::cvtColor(cv::Mat(h, w, CV_8UC2, f.data, step), dst, cv::COLOR_YUV2BGRA_YUY2); break;
-        case hal::PixelFormat::kUyvy: cv::cvtColor(cv::Mat(h, w, CV_8UC2, f.data, step), dst, cv::COLOR_YUV2BGRA_UYVY); break;
-        case hal::PixelFormat::kNv12: cv::cvtColor(cv::Mat(h * 3 / 2, w, CV_8UC1, f.data, step), dst, cv::COLOR_YUV2BGRA_NV12); break;
-        case hal::PixelFormat::kBgr24: cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step), dst, cv::COLOR_BGR2BGRA); break;
-        case hal::PixelFormat::kRgb24: cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step), dst, cv::COLOR_RGB2BGRA); break;
-        case hal::PixelFormat::kGray8: cv::cvtColor(cv::Mat(h, w, CV_8UC1, f.data, step), dst, cv::COLOR_GRAY2BGRA); break;
-        case hal::PixelFormat::kBgra32: cv::Mat(h, w, CV_8UC4, f.data, step).copyTo(dst); break;
+        case hal::PixelFormat::kYuyv:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC2, f.data, step), dst, cv::COLOR_YUV2BGRA_YUY2);
+            break;
+        case hal::PixelFormat::kUyvy:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC2, f.data, step), dst, cv::COLOR_YUV2BGRA_UYVY);
+            break;
+        case hal::PixelFormat::kNv12:
+            cv::cvtColor(cv::Mat(h * 3 / 2, w, CV_8UC1, f.data, step), dst,
+                         cv::COLOR_YUV2BGRA_NV12);
+            break;
+        case hal::PixelFormat::kBgr24:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step), dst, cv::COLOR_BGR2BGRA);
+            break;
+        case hal::PixelFormat::kRgb24:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC3, f.data, step), dst, cv::COLOR_RGB2BGRA);
+            break;
+        case hal::PixelFormat::kGray8:
+            cv::cvtColor(cv::Mat(h, w, CV_8UC1, f.data, step), dst, cv::COLOR_GRAY2BGRA);
+            break;
+        case hal::PixelFormat::kBgra32:
+            cv::Mat(h, w, CV_8UC4, f.data, step).copyTo(dst);
+            break;
     }
     const hal::Nanos dt = mono_now() - t0;
     stats.copy_ns_total += dt;
@@ -319,7 +359,8 @@ std::uint32_t KmsSink::Impl::copy_fb(const hal::Frame& f) {
 
 std::uint32_t KmsSink::Impl::overlay_fb(gbm_bo* bo) {
     if (auto* f = static_cast<BoFb*>(gbm_bo_get_user_data(bo))) return f->fb;
-    const std::uint32_t w = gbm_bo_get_width(bo), h = gbm_bo_get_height(bo), format = gbm_bo_get_format(bo);
+    const std::uint32_t w = gbm_bo_get_width(bo), h = gbm_bo_get_height(bo),
+                        format = gbm_bo_get_format(bo);
     const std::uint64_t modifier = gbm_bo_get_modifier(bo);
     std::uint32_t handles[4] = {}, pitches[4] = {}, offsets[4] = {};
     std::uint64_t modifiers[4] = {};
@@ -333,8 +374,8 @@ std::uint32_t KmsSink::Impl::overlay_fb(gbm_bo* bo) {
     std::uint32_t fb = 0;
     int r = -1;
     if (dev.modifiers && modifier != DRM_FORMAT_MOD_INVALID)
-        r = drmModeAddFB2WithModifiers(dev.fd, w, h, format, handles, pitches, offsets, modifiers, &fb,
-                                       DRM_MODE_FB_MODIFIERS);
+        r = drmModeAddFB2WithModifiers(dev.fd, w, h, format, handles, pitches, offsets, modifiers,
+                                       &fb, DRM_MODE_FB_MODIFIERS);
     // Mesa's kms_swrast reports an invalid modifier: the buffer is plain linear.
     if (r != 0) r = drmModeAddFB2(dev.fd, w, h, format, handles, pitches, offsets, &fb, 0);
     if (r != 0) {
@@ -376,12 +417,14 @@ void KmsSink::Impl::add_planes(std::uint32_t video_fb, int src_w, int src_h, std
 // A readback commit gives the CRTC to the writeback connector alone: vkms in Linux
 // 6.1 fails its clone check with the Virtual and Writeback encoders together. The
 // next commit gives the CRTC back to the monitor.
-int KmsSink::Impl::commit_atomic(std::uint32_t video_fb, int src_w, int src_h, std::uint32_t ofb, bool test_only) {
+int KmsSink::Impl::commit_atomic(std::uint32_t video_fb, int src_w, int src_h, std::uint32_t ofb,
+                                 bool test_only) {
     req.clear();
     const bool readback = !test_only && wb_requested && wb_attached;
     const bool routing = modeset || readback || wb_restore;
     if (routing) {
-        if (mode_blob == 0 && drmModeCreatePropertyBlob(dev.fd, &dev.mode, sizeof dev.mode, &mode_blob) != 0)
+        if (mode_blob == 0 &&
+            drmModeCreatePropertyBlob(dev.fd, &dev.mode, sizeof dev.mode, &mode_blob) != 0)
             return -errno;
         req.add(dev.connector_id, dev.conn_crtc_prop, readback ? 0 : dev.crtc_id);
         req.add(dev.crtc_id, dev.crtc_mode_prop, mode_blob);
@@ -409,13 +452,17 @@ int KmsSink::Impl::commit_atomic(std::uint32_t video_fb, int src_w, int src_h, s
 }
 
 int KmsSink::Impl::commit_legacy(std::uint32_t video_fb, std::uint32_t ofb) {
-    if (modeset && drmModeSetCrtc(dev.fd, dev.crtc_id, video_fb, 0, 0, &dev.connector_id, 1, &dev.mode) != 0)
+    if (modeset &&
+        drmModeSetCrtc(dev.fd, dev.crtc_id, video_fb, 0, 0, &dev.connector_id, 1, &dev.mode) != 0)
         return -errno;
     const std::uint32_t w = dev.mode.hdisplay, h = dev.mode.vdisplay;
-    if (drmModeSetPlane(dev.fd, dev.overlay.id, ofb != 0 ? dev.crtc_id : 0, ofb, 0, 0, 0, ofb != 0 ? w : 0,
-                        ofb != 0 ? h : 0, 0, 0, ofb != 0 ? w << 16 : 0, ofb != 0 ? h << 16 : 0) != 0)
+    if (drmModeSetPlane(dev.fd, dev.overlay.id, ofb != 0 ? dev.crtc_id : 0, ofb, 0, 0, 0,
+                        ofb != 0 ? w : 0, ofb != 0 ? h : 0, 0, 0, ofb != 0 ? w << 16 : 0,
+                        ofb != 0 ? h << 16 : 0) != 0)
         return -errno;
-    return drmModePageFlip(dev.fd, dev.crtc_id, video_fb, DRM_MODE_PAGE_FLIP_EVENT, this) == 0 ? 0 : -errno;
+    return drmModePageFlip(dev.fd, dev.crtc_id, video_fb, DRM_MODE_PAGE_FLIP_EVENT, this) == 0
+               ? 0
+               : -errno;
 }
 
 namespace {
@@ -433,7 +480,8 @@ bool KmsSink::Impl::wait_flip() {
     ev.version = 2;
     ev.page_flip_handler = on_flip;
     const hal::Nanos period = static_cast<hal::Nanos>(1e9 / std::max(1.0, mode_refresh(dev.mode)));
-    const hal::Nanos deadline = mono_now() + std::max<hal::Nanos>(5 * period, 250 * hal::kMillisecond);
+    const hal::Nanos deadline =
+        mono_now() + std::max<hal::Nanos>(5 * period, 250 * hal::kMillisecond);
     while (!flip_done) {
         const hal::Nanos left = deadline - mono_now();
         if (left <= 0) return false;
@@ -451,7 +499,8 @@ void KmsSink::Impl::lost_monitor(const std::string& why) {
     ++stats.disconnects;
     modeset = true;
     next_probe = mono_now() + hal::kSecond;
-    log_line("connector " + dev.connector_name + ": " + why + "; dropping frames, probing once a second");
+    log_line("connector " + dev.connector_name + ": " + why +
+             "; dropping frames, probing once a second");
 }
 
 KmsSink::KmsSink(KmsSinkConfig config, hal::Clock& clock)
@@ -460,7 +509,8 @@ KmsSink::~KmsSink() = default;
 
 bool KmsSink::open() {
     Impl& m = *impl_;
-    if (!m.dev.open(m.cfg.card, m.cfg.connector, m.cfg.width, m.cfg.height, m.cfg.refresh_hz, m.cfg.atomic, m.error))
+    if (!m.dev.open(m.cfg.card, m.cfg.connector, m.cfg.width, m.cfg.height, m.cfg.refresh_hz,
+                    m.cfg.atomic, m.error))
         return false;
     if (m.cfg.writeback && m.dev.atomic && m.dev.wb_connector_id != 0 && m.dev.wb_fb_prop != 0) {
         if (!m.wb.create(m.dev.fd, m.dev.mode.hdisplay, m.dev.mode.vdisplay, m.error)) return false;
@@ -474,9 +524,11 @@ bool KmsSink::configure(const hal::FrameFormat& format) {
     if (m.dev.fd < 0) return m.fail("display not open");
     if (!format.valid()) return m.fail("display: invalid video format");
     if (format.width > m.dev.mode.hdisplay || format.height > m.dev.mode.vdisplay)
-        return m.fail("display: video " + std::to_string(format.width) + "x" + std::to_string(format.height) +
-                      " is larger than the mode " + std::to_string(m.dev.mode.hdisplay) + "x" +
-                      std::to_string(m.dev.mode.vdisplay) + " of " + m.dev.connector_name + " (board file: display.mode)");
+        return m.fail("display: video " + std::to_string(format.width) + "x" +
+                      std::to_string(format.height) + " is larger than the mode " +
+                      std::to_string(m.dev.mode.hdisplay) + "x" +
+                      std::to_string(m.dev.mode.vdisplay) + " of " + m.dev.connector_name +
+                      " (board file: display.mode)");
     m.format = format;
     m.fourcc = drm_fourcc(static_cast<int>(format.pixel_format));
     m.drop_imports();
@@ -485,7 +537,8 @@ bool KmsSink::configure(const hal::FrameFormat& format) {
                   format.width == m.dev.mode.hdisplay && format.height == m.dev.mode.vdisplay;
     m.zero_copy_checked = false;
     for (DumbBuffer& b : m.copies)
-        if (b.fb == 0 && !b.create(m.dev.fd, m.dev.mode.hdisplay, m.dev.mode.vdisplay, m.error)) return false;
+        if (b.fb == 0 && !b.create(m.dev.fd, m.dev.mode.hdisplay, m.dev.mode.vdisplay, m.error))
+            return false;
     for (DumbBuffer& b : m.copies) std::memset(b.map, 0, b.size);  // black around a smaller frame
     return true;
 }
@@ -511,15 +564,17 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
         const int r = m.commit_atomic(video_fb, video.format.width, video.format.height, 0, true);
         m.zero_copy_checked = true;
         if (r != 0) {
-            log_line("the primary plane refuses the capture buffer (" + std::string(std::strerror(-r)) +
-                     "); copying frames instead");
+            log_line("the primary plane refuses the capture buffer (" +
+                     std::string(std::strerror(-r)) + "); copying frames instead");
             m.zero_copy = false;
             video_fb = 0;
         }
     }
     const bool copied = video_fb == 0;
-    if (copied) video_fb = m.copy_fb(video);
-    else ++m.stats.zero_copy_frames;
+    if (copied)
+        video_fb = m.copy_fb(video);
+    else
+        ++m.stats.zero_copy_frames;
     const int src_w = copied ? m.dev.mode.hdisplay : video.format.width;
     const int src_h = copied ? m.dev.mode.vdisplay : video.format.height;
 
@@ -529,7 +584,9 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
     if (layer != nullptr && !layer->empty()) {
         const hal::Nanos t0 = mono_now();
         EGLint age = 0;
-        if (!m.buffer_age || !eglQuerySurface(m.egl_display, m.egl_surface, EGL_BUFFER_AGE_EXT, &age)) age = 0;
+        if (!m.buffer_age ||
+            !eglQuerySurface(m.egl_display, m.egl_surface, EGL_BUFFER_AGE_EXT, &age))
+            age = 0;
         if (!m.overlay->draw(layer, age)) {
             m.error = m.overlay->error();
             return -1;
@@ -552,26 +609,30 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
     }
 
     const hal::Nanos committed = mono_now();
-    int r = m.dev.atomic ? m.commit_atomic(video_fb, src_w, src_h, ofb, false) : m.commit_legacy(video_fb, ofb);
+    int r = m.dev.atomic ? m.commit_atomic(video_fb, src_w, src_h, ofb, false)
+                         : m.commit_legacy(video_fb, ofb);
     if (r != 0 && !copied) {
         // The driver took the test but not the flip: fall back to copying for good.
         m.zero_copy = false;
         video_fb = m.copy_fb(video);
-        r = m.dev.atomic ? m.commit_atomic(video_fb, m.dev.mode.hdisplay, m.dev.mode.vdisplay, ofb, false)
-                         : m.commit_legacy(video_fb, ofb);
+        r = m.dev.atomic
+                ? m.commit_atomic(video_fb, m.dev.mode.hdisplay, m.dev.mode.vdisplay, ofb, false)
+                : m.commit_legacy(video_fb, ofb);
     }
     bool flipped = r == 0 && m.wait_flip();
     if (r == 0 && !flipped) ++m.stats.flip_timeouts;
     if (!flipped) {
         if (bo != nullptr) gbm_surface_release_buffer(m.gsurf, bo);
         if (!m.dev.probe_connected()) {
-            m.lost_monitor(r != 0 ? "commit failed (" + std::string(std::strerror(-r)) + ") and no monitor"
+            m.lost_monitor(r != 0 ? "commit failed (" + std::string(std::strerror(-r)) +
+                                        ") and no monitor"
                                   : "no page flip and no monitor");
             ++m.stats.dropped_frames;
             return m.clock.now();
         }
-        m.error = r != 0 ? system::errno_message(m.dev.atomic ? "DRM_IOCTL_MODE_ATOMIC" : "drmModePageFlip",
-                                                 m.dev.card + " " + m.dev.connector_name, -r)
+        m.error = r != 0 ? system::errno_message(
+                               m.dev.atomic ? "DRM_IOCTL_MODE_ATOMIC" : "drmModePageFlip",
+                               m.dev.card + " " + m.dev.connector_name, -r)
                          : m.dev.card + ": no page-flip event within 250 ms";
         return -1;
     }
@@ -585,9 +646,15 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
     return m.flip_ns;
 }
 
-bool KmsSink::finish() { return true; }
-const std::string& KmsSink::error() const { return impl_->error; }
-std::string KmsSink::connector_name() const { return impl_->dev.connector_name; }
+bool KmsSink::finish() {
+    return true;
+}
+const std::string& KmsSink::error() const {
+    return impl_->error;
+}
+std::string KmsSink::connector_name() const {
+    return impl_->dev.connector_name;
+}
 std::string KmsSink::mode_name() const {
     char buf[64];
     const drmModeModeInfo& md = impl_->dev.mode;
@@ -597,9 +664,15 @@ std::string KmsSink::mode_name() const {
 hal::Nanos KmsSink::refresh_period() const {
     return static_cast<hal::Nanos>(1e9 / std::max(1.0, mode_refresh(impl_->dev.mode)));
 }
-bool KmsSink::atomic() const { return impl_->dev.atomic; }
-bool KmsSink::connected() const { return impl_->connected; }
-const KmsSinkStats& KmsSink::stats() const { return impl_->stats; }
+bool KmsSink::atomic() const {
+    return impl_->dev.atomic;
+}
+bool KmsSink::connected() const {
+    return impl_->connected;
+}
+const KmsSinkStats& KmsSink::stats() const {
+    return impl_->stats;
+}
 
 bool KmsSink::request_readback() {
     if (!impl_->wb_attached) return false;
@@ -612,7 +685,8 @@ const std::uint8_t* KmsSink::readback(int& stride, hal::Nanos timeout_ns) {
     if (!m.wb_pending) return nullptr;
     if (m.wb_fence >= 0) {
         pollfd p{m.wb_fence, POLLIN, 0};
-        const int r = system::retry_eintr([&] { return poll(&p, 1, static_cast<int>(timeout_ns / hal::kMillisecond)); });
+        const int r = system::retry_eintr(
+            [&] { return poll(&p, 1, static_cast<int>(timeout_ns / hal::kMillisecond)); });
         ::close(m.wb_fence);
         m.wb_fence = -1;
         if (r <= 0) return nullptr;

@@ -94,8 +94,8 @@ TEST(NoSignalSource, CardAfterTheSilenceThenFramesAgain) {
 }
 
 TEST(NoSignalSource, CardIsBlackWithWhiteWordsInTheMiddle) {
-    for (hal::PixelFormat pf : {hal::PixelFormat::kYuyv, hal::PixelFormat::kUyvy, hal::PixelFormat::kBgra32,
-                                hal::PixelFormat::kNv12}) {
+    for (hal::PixelFormat pf : {hal::PixelFormat::kYuyv, hal::PixelFormat::kUyvy,
+                                hal::PixelFormat::kBgra32, hal::PixelFormat::kNv12}) {
         test::ManualClock clock;
         ScriptSource inner(clock, "", pf);
         CountingLog log;
@@ -108,10 +108,14 @@ TEST(NoSignalSource, CardIsBlackWithWhiteWordsInTheMiddle) {
         auto luma = [&](int x, int y) -> int {
             const std::uint8_t* row = c.data() + static_cast<std::size_t>(y) * fmt.stride;
             switch (pf) {
-                case hal::PixelFormat::kYuyv: return row[2 * x];
-                case hal::PixelFormat::kUyvy: return row[2 * x + 1];
-                case hal::PixelFormat::kBgra32: return row[4 * x + 1];
-                default: return row[x];
+                case hal::PixelFormat::kYuyv:
+                    return row[2 * x];
+                case hal::PixelFormat::kUyvy:
+                    return row[2 * x + 1];
+                case hal::PixelFormat::kBgra32:
+                    return row[4 * x + 1];
+                default:
+                    return row[x];
             }
         };
         const int black = pf == hal::PixelFormat::kBgra32 ? 0 : 16;  // limited-range YUV black
@@ -121,8 +125,10 @@ TEST(NoSignalSource, CardIsBlackWithWhiteWordsInTheMiddle) {
         for (int y = 0; y < 360; ++y)
             for (int x = 0; x < 640; ++x) {
                 const bool lit = luma(x, y) > 200;
-                if (y > 120 && y < 240) bright += lit;
-                else outside += lit;
+                if (y > 120 && y < 240)
+                    bright += lit;
+                else
+                    outside += lit;
             }
         EXPECT_GT(bright, 1000) << hal::to_string(pf);  // the words, in the middle band
         EXPECT_EQ(outside, 0) << hal::to_string(pf);

@@ -15,7 +15,7 @@ TEST(TestPatternStage, BarsAndThePromptOfTheMoment) {
     std::vector<std::uint8_t> px(f.size_bytes());
     hal::Frame frame{f, px.data()};
     JsonLine trace;
-        trace.begin_object();
+    trace.begin_object();
     AnalysisContext ctx{frame, {}, canvas, trace, 0};
     stage.set_prompt(1);
     stage.process(ctx);
@@ -33,7 +33,9 @@ TEST(TestPatternStage, BarsAndThePromptOfTheMoment) {
     EXPECT_EQ(canvas.row(b.y + 1)[4 * (b.x + 1) + 3], 200);
     int white = 0;
     for (int y = b.y; y < b.y + b.height; ++y)
-        for (int x = b.x; x < b.x + b.width; ++x) white += canvas.row(y)[4 * x] > 200 && canvas.row(y)[4 * x + 1] > 200 && canvas.row(y)[4 * x + 2] > 200;
+        for (int x = b.x; x < b.x + b.width; ++x)
+            white += canvas.row(y)[4 * x] > 200 && canvas.row(y)[4 * x + 1] > 200 &&
+                     canvas.row(y)[4 * x + 2] > 200;
     EXPECT_GT(white, 100);
     // Nothing between the banner and the bars.
     EXPECT_EQ(canvas.row(b.y + b.height + 5)[4 * 320 + 3], 0);
@@ -56,7 +58,8 @@ TEST(TestPatternStage, PromptsDiffer) {
         stage.process(ctx);
         const hal::Rect b = TestPatternStage::banner_rect(320, 180);
         std::vector<std::uint8_t> out;
-        for (int y = b.y; y < b.y + b.height; ++y) out.insert(out.end(), canvas.row(y) + 4 * b.x, canvas.row(y) + 4 * (b.x + b.width));
+        for (int y = b.y; y < b.y + b.height; ++y)
+            out.insert(out.end(), canvas.row(y) + 4 * b.x, canvas.row(y) + 4 * (b.x + b.width));
         return out;
     };
     EXPECT_NE(draw(0), draw(1));

@@ -18,18 +18,21 @@ namespace {
 class Headless {
 public:
     bool open(int w, int h) {
-        auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+        auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+            eglGetProcAddress("eglGetPlatformDisplayEXT"));
         if (get_display == nullptr) return false;
         display_ = get_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
         if (display_ == EGL_NO_DISPLAY || !eglInitialize(display_, nullptr, nullptr)) return false;
         eglBindAPI(EGL_OPENGL_ES_API);
-        const EGLint attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_ES2_BIT, EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_NONE};
+        const EGLint attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_ES2_BIT, EGL_SURFACE_TYPE,
+                                  EGL_PBUFFER_BIT, EGL_NONE};
         EGLConfig config = nullptr;
         EGLint n = 0;
         if (!eglChooseConfig(display_, attribs, &config, 1, &n) || n == 0) return false;
         const EGLint ctx[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
         context_ = eglCreateContext(display_, config, EGL_NO_CONTEXT, ctx);
-        if (context_ == EGL_NO_CONTEXT || !eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
+        if (context_ == EGL_NO_CONTEXT ||
+            !eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
             return false;
         w_ = w;
         h_ = h;
@@ -76,7 +79,8 @@ struct Layer {
         px.assign(static_cast<std::size_t>(layer.stride) * h, 0);
         layer.rgba = px.data();
     }
-    void fill(hal::Rect r, std::uint8_t R, std::uint8_t G, std::uint8_t B, std::uint8_t A, bool mark = true) {
+    void fill(hal::Rect r, std::uint8_t R, std::uint8_t G, std::uint8_t B, std::uint8_t A,
+              bool mark = true) {
         for (int y = r.y; y < r.y + r.height; ++y)
             for (int x = r.x; x < r.x + r.width; ++x) {
                 std::uint8_t* p = &px[static_cast<std::size_t>(y) * layer.stride + 4 * x];
@@ -93,7 +97,9 @@ protected:
     void SetUp() override {
         // Mesa's software rasteriser: no GPU or display needed.
         setenv("EGL_PLATFORM", "surfaceless", 0);
-        if (!gl_.open(kW, kH)) GTEST_SKIP() << "no EGL surfaceless GLES2 context on this host (Mesa's libegl-mesa0 missing?)";
+        if (!gl_.open(kW, kH))
+            GTEST_SKIP()
+                << "no EGL surfaceless GLES2 context on this host (Mesa's libegl-mesa0 missing?)";
         ASSERT_TRUE(overlay_.init(kW, kH, false)) << overlay_.error();
     }
     static const std::uint8_t* at(const std::vector<std::uint8_t>& px, int x, int y) {
@@ -119,9 +125,18 @@ TEST_F(GlesOverlayTest, OpaqueRectsExactAndOnlyThem) {
         for (int x = 0; x < kW; ++x) {
             const std::uint8_t* p = at(px, x, y);
             const bool in1 = x >= 10 && x < 30 && y >= 5 && y < 13, in2 = x < 3 && y >= 40;
-            const int want[4] = {in1 ? 200 : in2 ? 1 : 0, in1 ? 100 : in2 ? 2 : 0, in1 ? 50 : in2 ? 3 : 0,
+            const int want[4] = {in1   ? 200
+                                 : in2 ? 1
+                                       : 0,
+                                 in1   ? 100
+                                 : in2 ? 2
+                                       : 0,
+                                 in1   ? 50
+                                 : in2 ? 3
+                                       : 0,
                                  in1 || in2 ? 255 : 0};
-            for (int c = 0; c < 4; ++c) ASSERT_EQ(p[c], want[c]) << "pixel " << x << "," << y << " channel " << c;
+            for (int c = 0; c < 4; ++c)
+                ASSERT_EQ(p[c], want[c]) << "pixel " << x << "," << y << " channel " << c;
         }
 }
 

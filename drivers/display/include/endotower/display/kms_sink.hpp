@@ -61,7 +61,8 @@ public:
     // with error() naming the card or connector and the fix.
     bool open();
     bool configure(const hal::FrameFormat& format) override;
-    hal::Nanos present(const hal::Frame& video, const hal::OverlayLayer* overlay, hal::Nanos due_ns) override;
+    hal::Nanos present(const hal::Frame& video, const hal::OverlayLayer* overlay,
+                       hal::Nanos due_ns) override;
     bool finish() override;
     const std::string& error() const override;
 
