@@ -1,6 +1,7 @@
 // Board file parsing: values, defaults, path resolution, and errors naming the line
 // and field.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -13,7 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string write_board(const std::string& name, const std::string& text) {
-    const fs::path dir = fs::temp_directory_path() / "endotower_board_test";
+    // One directory per process: CTest runs the tests of this file in parallel.
+    const fs::path dir = fs::temp_directory_path() / ("endotower_board_test_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const fs::path p = dir / name;
     std::ofstream(p) << text;
@@ -161,7 +163,7 @@ namespace endotower::firmware {
 namespace {
 
 std::string write_input_board(const std::string& text) {
-    const auto dir = std::filesystem::temp_directory_path() / "endotower_board_test";
+    const auto dir = std::filesystem::temp_directory_path() / ("endotower_board_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const auto p = dir / "input.yaml";
     std::ofstream(p) << text;
