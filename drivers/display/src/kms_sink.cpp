@@ -434,7 +434,8 @@ int KmsSink::Impl::commit_atomic(std::uint32_t video_fb, int src_w, int src_h, s
         req.add(dev.wb_connector_id, dev.wb_crtc_prop, dev.crtc_id);
         req.add(dev.wb_connector_id, dev.wb_fb_prop, wb.fb);
         req.add(dev.wb_connector_id, dev.wb_fence_prop, reinterpret_cast<std::uint64_t>(&wb_fence));
-    } else if (wb_restore) {
+    } else if (routing && dev.wb_connector_id != 0) {
+        // Whoever had the card before may have left the writeback connector on the CRTC.
         req.add(dev.wb_connector_id, dev.wb_crtc_prop, 0);
     }
     add_planes(video_fb, src_w, src_h, ofb);
