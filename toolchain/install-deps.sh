@@ -13,6 +13,9 @@ packages=(
   # the qemu guest of tests/driver (real kernel drivers: vivid, uhid, gpio-sim, vkms)
   qemu-system-x86 busybox-static kmod linux-headers-amd64 linux-source-6.1 bc
   v4l-utils gpiod libdrm-tests udev
+  # display driver (issue 9): DRM/KMS, GBM, EGL, GLES2; Mesa's llvmpipe for the headless
+  # overlay test and for vkms in the guest
+  libdrm-dev libgbm-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
 )
 
 missing=()

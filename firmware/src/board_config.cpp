@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -108,6 +109,19 @@ struct Reader {
     }
 };
 
+// "1920x1080@60" or "1920x1080@59.94" (the refresh may be left out: 60).
+bool parse_mode(const std::string& text, int& w, int& h, double& hz) {
+    char x = 0, at = 0;
+    std::istringstream s(text);
+    s.imbue(std::locale::classic());
+    hz = 60.0;
+    if (!(s >> w >> x >> h) || x != 'x' || w < 64 || h < 64 || w > 8192 || h > 8192) return false;
+    if (s >> at) {
+        if (at != '@' || !(s >> hz) || hz < 1 || hz > 500) return false;
+    }
+    return (s >> std::ws).eof();
+}
+
 std::string resolve(const fs::path& base, const std::string& p) {
     if (p.empty() || fs::path(p).is_absolute()) return p;
     return (base / p).lexically_normal().string();
@@ -130,7 +144,7 @@ bool load_input_devices(Reader& r, const YAML::Node& root, BoardConfig& c) {
         v4l2::CaptureFormat f{};
         if (!v4l2::parse_capture_format(k.format, f))
             return r.fail(n["format"], "capture.format",
-                          "unknown format '" + k.format + "' (expected yuyv, uyvy or nv12)");
+                          "unknown format '" + k.format + "' (expected yuyv, uyvy, nv12 or bgrx)");
         if (!v4l2::info(f).supported) return r.fail(n["format"], "capture.format", std::string(v4l2::info(f).why));
         v4l2::DvTimingsName dv;
         if (!k.dv_timings.empty() && k.dv_timings != "query" && !v4l2::parse_dv_timings_name(k.dv_timings, dv))
@@ -184,14 +198,15 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         return false;
     }
     if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "capture", "button", "handle",
-                           "calibration"}))
+                           "calibration", "display", "paths"}))
         return false;
     if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
         return false;
     if (!r.text(root, "calibration", "calibration", c.calibration)) return false;
     if (const YAML::Node v = root["video"]) {
-        if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms", "late_tolerance_ms"}) ||
+        if (!r.keys(v, "video", {"latency_ms", "compose_budget_ms", "late_tolerance_ms", "latency_budget_ms"}) ||
+            !r.number(v, "latency_budget_ms", "video.latency_budget_ms", 0, 10000, c.latency_budget_ms) ||
             !r.number(v, "late_tolerance_ms", "video.late_tolerance_ms", 0, 1000, c.late_tolerance_ms) ||
             !r.number(v, "latency_ms", "video.latency_ms", 0, 1000, c.latency_ms) ||
             !r.number(v, "compose_budget_ms", "video.compose_budget_ms", 0, 1000, c.compose_budget_ms))
@@ -250,10 +265,27 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             !r.number(s, "fps", "sim.fps", 0, 1000, c.sim_fps))
             return false;
     }
+    if (const YAML::Node d = root["display"]) {
+        std::string mode;
+        if (!r.keys(d, "display", {"card", "connector", "mode", "zero_copy", "atomic"}) ||
+            !r.text(d, "card", "display.card", c.display_card) ||
+            !r.text(d, "connector", "display.connector", c.display_connector) ||
+            !r.text(d, "mode", "display.mode", mode) ||
+            !r.boolean(d, "zero_copy", "display.zero_copy", c.display_zero_copy) ||
+            !r.boolean(d, "atomic", "display.atomic", c.display_atomic))
+            return false;
+        if (!mode.empty() && !parse_mode(mode, c.display_width, c.display_height, c.display_refresh_hz))
+            return r.fail(d["mode"], "display.mode", "expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '" + mode + "'");
+        if (c.display_card.empty()) return r.fail(d["card"], "display.card", "must name a device, e.g. /dev/dri/card0");
+    }
+    if (const YAML::Node p = root["paths"]) {
+        if (!r.keys(p, "paths", {"storage"}) || !r.text(p, "storage", "paths.storage", c.storage))
+            return false;
+    }
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
     for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model,
-                           &c.calibration, &c.gesture_model})
+                           &c.calibration, &c.gesture_model, &c.storage})
         *p = resolve(base, *p);
     out = std::move(c);
     return true;

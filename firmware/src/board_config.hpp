@@ -40,6 +40,18 @@ struct BoardConfig {
     std::string gesture_model;     // a file of 'endotower train-gestures'
     double gesture_hold_ms = 1000.0;  // held still this long before it fires
 
+    // display (drivers/display): display.card, .connector, .mode "WxH@HZ", .zero_copy, .atomic
+    std::string display_card = "/dev/dri/card0";
+    std::string display_connector;  // "" = the first connected
+    int display_width = 1920, display_height = 1080;
+    double display_refresh_hz = 60.0;
+    bool display_zero_copy = true, display_atomic = true;
+    double latency_budget_ms = 0.0;  // video.latency_budget_ms: capture -> flip limit; 0 = period + 2 ms
+
+    // paths.storage: a writable directory (selftest checks it); the calibration file is the
+    // top-level `calibration`, the gesture model `analysis.gestures.model`
+    std::string storage;
+
     // sim
     std::string sim_input, sim_events, sim_output, sim_frames, sim_trace;
     bool sim_realtime = false;

@@ -20,5 +20,7 @@ int run_scene_command(const Args& args);
 int run_train_tool_model_command(const Args& args);
 int run_calibrate_command(const Args& args);
 int run_train_gestures_command(const Args& args);
+int run_run_command(const Args& args);
+int run_selftest_command(const Args& args);
 
 }  // namespace endotower::firmware

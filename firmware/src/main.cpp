@@ -28,6 +28,8 @@ constexpr Command kCommands[] = {
     {"train-tool-model", run_train_tool_model_command, "train the per-pixel tool likelihood of the likelihood tracker"},
     {"calibrate", run_calibrate_command, "calibrate the scope (centre, focal length, distortion), write its file"},
     {"train-gestures", run_train_gestures_command, "train the tool-gesture classifier from labelled recordings"},
+    {"run", run_run_command, "the appliance: capture device to monitor, from the board file"},
+    {"selftest", run_selftest_command, "check camera, handle, display, latency, files; write a report"},
 };
 
 void print_help() {

@@ -14,9 +14,12 @@ constexpr CaptureFormatInfo kFormats[] = {
     {CaptureFormat::kYuyv, "yuyv", V4L2_PIX_FMT_YUYV, hal::PixelFormat::kYuyv, true, ""},
     {CaptureFormat::kUyvy, "uyvy", V4L2_PIX_FMT_UYVY, hal::PixelFormat::kUyvy, true, ""},
     {CaptureFormat::kNv12, "nv12", V4L2_PIX_FMT_NV12, hal::PixelFormat::kNv12, true, ""},
+    // B G R X bytes (V4L2 XBGR32 = DRM XRGB8888): what a display plane without YUV
+    // takes directly, so the DMABUF is scanned out without a copy (vivid -> vkms).
+    {CaptureFormat::kBgrx, "bgrx", V4L2_PIX_FMT_XBGR32, hal::PixelFormat::kBgra32, true, ""},
     {CaptureFormat::kMjpeg, "mjpeg", V4L2_PIX_FMT_MJPEG, hal::PixelFormat::kBgr24, false,
      "MJPEG is not supported: decoding it would allocate per frame (libjpeg image pools); "
-     "set capture.format to yuyv, uyvy or nv12"},
+     "set capture.format to yuyv, uyvy, nv12 or bgrx"},
 };
 }  // namespace
 

@@ -451,6 +451,7 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         out.data = static_cast<std::uint8_t*>(m.buffers[index].data);
         out.sequence = seq;
         out.buffer_index = index;
+        out.dmabuf_fd = m.buffers[index].dmabuf;  // the display scans it out without a copy
         const bool monotonic =
             (newest.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
         out.capture_ns =

@@ -1,6 +1,7 @@
 // Board file parsing: values, defaults, path resolution, and errors naming the line
 // and field.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -13,7 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string write_board(const std::string& name, const std::string& text) {
-    const fs::path dir = fs::temp_directory_path() / "endotower_board_test";
+    // One directory per process: CTest runs the tests of this file in parallel.
+    const fs::path dir = fs::temp_directory_path() / ("endotower_board_test_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const fs::path p = dir / name;
     std::ofstream(p) << text;
@@ -75,6 +77,50 @@ TEST(Board, CalibrationPathIsResolvedAgainstTheBoardFile) {
     EXPECT_NE(err.find("cal_bad.yaml:2: field 'calibration'"), std::string::npos) << err;
 }
 
+TEST(Board, DisplayAndPaths) {
+    const std::string p = write_board("display.yaml",
+                                      "board: t\n"
+                                      "video: {latency_budget_ms: 18.7}\n"
+                                      "display: {card: /dev/dri/card1, connector: HDMI-A-2, mode: 1280x720@50,\n"
+                                      "          zero_copy: false, atomic: false}\n"
+                                      "calibration: cal.json\n"
+                                      "analysis: {gestures: {model: /opt/m.yml}}\n"
+                                      "paths: {storage: store}\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_EQ(b.display_card, "/dev/dri/card1");
+    EXPECT_EQ(b.display_connector, "HDMI-A-2");
+    EXPECT_EQ(b.display_width, 1280);
+    EXPECT_EQ(b.display_height, 720);
+    EXPECT_DOUBLE_EQ(b.display_refresh_hz, 50.0);
+    EXPECT_FALSE(b.display_zero_copy);
+    EXPECT_FALSE(b.display_atomic);
+    EXPECT_DOUBLE_EQ(b.latency_budget_ms, 18.7);
+    EXPECT_EQ(b.calibration, (fs::path(p).parent_path() / "cal.json").string());
+    EXPECT_EQ(b.gesture_model, "/opt/m.yml");
+    EXPECT_EQ(b.storage, (fs::path(p).parent_path() / "store").string());
+
+    // Defaults: 1920x1080@60 on the first card's first connected connector.
+    BoardConfig d;
+    ASSERT_TRUE(load_board(write_board("plain.yaml", "board: t\ndisplay: {mode: 3840x2160}\n"), d, err)) << err;
+    EXPECT_EQ(d.display_card, "/dev/dri/card0");
+    EXPECT_EQ(d.display_connector, "");
+    EXPECT_EQ(d.display_width, 3840);
+    EXPECT_DOUBLE_EQ(d.display_refresh_hz, 60.0);
+    EXPECT_TRUE(d.display_zero_copy);
+}
+
+// Every shipped board loads.
+TEST(Board, ShippedBoardsLoad) {
+    for (const char* name : {"sim", "vhw", "rpi5", "rk3588"}) {
+        BoardConfig b;
+        std::string err;
+        EXPECT_TRUE(load_board(std::string(ENDOTOWER_SOURCE_DIR "/board/") + name + "/board.yaml", b, err)) << err;
+        EXPECT_EQ(b.name, name);
+    }
+}
+
 struct BadCase {
     const char* text;
     const char* message;  // after "FILE:"
@@ -82,11 +128,18 @@ struct BadCase {
 
 TEST(Board, ErrorsNameTheLineAndField) {
     const BadCase cases[] = {
+        {"board: t\ndisplay:\n  mode: 1920by1080\n",
+         "3: field 'display.mode': expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '1920by1080'"},
+        {"board: t\ndisplay:\n  mode: 1920x1080@0\n",
+         "3: field 'display.mode': expected WIDTHxHEIGHT@HZ (e.g. 1920x1080@60), got '1920x1080@0'"},
+        {"board: t\ndisplay:\n  conector: HDMI-A-1\n",
+         "3: field 'display.conector': unknown key (expected one of: card, connector, mode, zero_copy, atomic)"},
+        {"board: t\npaths:\n  storage: [a]\n", "3: field 'paths.storage': expected a string"},
         {"board: t\nvideo:\n  latency_ms: fast\n",
          "3: field 'video.latency_ms': expected a number, got 'fast'"},
         {"board: t\nvideo:\n  latency_ms: -1\n", "3: field 'video.latency_ms': must be between 0 and 1000, got -1"},
         {"board: t\nvideo:\n  latncy_ms: 3\n",
-         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms, late_tolerance_ms)"},
+         "3: field 'video.latncy_ms': unknown key (expected one of: latency_ms, compose_budget_ms, late_tolerance_ms, latency_budget_ms)"},
         {"board: t\nanalysis:\n  stage: magic\n",
          "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
         {"board: t\nanalysis:\n  tracker: cnn\n",
@@ -155,7 +208,7 @@ namespace endotower::firmware {
 namespace {
 
 std::string write_input_board(const std::string& text) {
-    const auto dir = std::filesystem::temp_directory_path() / "endotower_board_test";
+    const auto dir = std::filesystem::temp_directory_path() / ("endotower_board_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const auto p = dir / "input.yaml";
     std::ofstream(p) << text;
@@ -207,10 +260,10 @@ TEST(BoardInput, CaptureButtonHandleValuesAndDefaults) {
 TEST(BoardInput, ErrorsNameTheLineAndField) {
     const std::pair<const char*, const char*> cases[] = {
         {"board: t\ncapture:\n  format: rgb\n",
-         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy or nv12)"},
+         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy, nv12 or bgrx)"},
         {"board: t\ncapture:\n  format: mjpeg\n",
          "3: field 'capture.format': MJPEG is not supported: decoding it would allocate per frame "
-         "(libjpeg image pools); set capture.format to yuyv, uyvy or nv12"},
+         "(libjpeg image pools); set capture.format to yuyv, uyvy, nv12 or bgrx"},
         {"board: t\ncapture:\n  dv_timings: 1080p\n",
          "3: field 'capture.dv_timings': expected query or timings like 1920x1080p60, got '1080p'"},
         {"board: t\ncapture:\n  buffers: 1\n", "3: field 'capture.buffers': must be between 2 and 16, got 1"},

@@ -18,6 +18,9 @@ TEST(CaptureFormat, NamesFourccsAndPipelineFormats) {
     ASSERT_TRUE(parse_capture_format("nv12", f));
     EXPECT_EQ(info(f).fourcc, V4L2_PIX_FMT_NV12);
     EXPECT_EQ(info(f).pixel, hal::PixelFormat::kNv12);
+    ASSERT_TRUE(parse_capture_format("bgrx", f));
+    EXPECT_EQ(info(f).fourcc, V4L2_PIX_FMT_XBGR32);
+    EXPECT_EQ(info(f).pixel, hal::PixelFormat::kBgra32);
     ASSERT_TRUE(parse_capture_format("mjpeg", f));
     EXPECT_EQ(info(f).fourcc, V4L2_PIX_FMT_MJPEG);
     EXPECT_FALSE(info(f).supported);

@@ -46,6 +46,7 @@ struct Frame {
     Nanos capture_ns = 0;          // capture timestamp, monotonic clock
     std::uint64_t sequence = 0;    // source sequence number; gaps mean dropped frames
     int buffer_index = -1;         // which buffer of the source's pool this is
+    int dmabuf_fd = -1;            // the buffer exported as DMABUF (owned by the source), or -1
 };
 
 }  // namespace endotower::hal

@@ -11,11 +11,11 @@
 
 namespace endotower::v4l2 {
 
-enum class CaptureFormat : std::uint8_t { kYuyv, kUyvy, kNv12, kMjpeg };
+enum class CaptureFormat : std::uint8_t { kYuyv, kUyvy, kNv12, kMjpeg, kBgrx };
 
 struct CaptureFormatInfo {
     CaptureFormat format;
-    std::string_view name;   // board file name: "yuyv", "uyvy", "nv12", "mjpeg"
+    std::string_view name;   // board file name: "yuyv", "uyvy", "nv12", "mjpeg", "bgrx"
     std::uint32_t fourcc;    // V4L2_PIX_FMT_*
     hal::PixelFormat pixel;  // what the pipeline gets (MJPEG: none, see supported)
     bool supported;          // false: refused at start() with `why`

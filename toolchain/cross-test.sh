@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# CI step for arm64: builds endotower with Debian's aarch64 cross compiler against the
+# arm64 sysroot (toolchain/install-cross-deps.sh) and runs the unit tests under
+# qemu-user on this host. The qemu-system guest tests (label "driver") boot an x86
+# kernel and are left to the native build.
+# Usage: toolchain/cross-test.sh [BUILD_DIR]   (default build/arm64; JOBS=N for -j)
+set -euo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${1:-$repo/build/arm64}
+jobs=${JOBS:-2}
+
+"$repo/toolchain/install-cross-deps.sh"
+cmake -S "$repo" -B "$build" -DCMAKE_TOOLCHAIN_FILE="$repo/toolchain/aarch64-linux-gnu.cmake" \
+  -DCMAKE_BUILD_TYPE=Release -DENDOTOWER_BUILD_BENCH=OFF >/dev/null
+cmake --build "$build" -j"$jobs"
+file "$build/firmware/endotower" | grep -q "ARM aarch64" || { echo "cross-test: endotower is not an arm64 binary" >&2; exit 1; }
+ctest --test-dir "$build" -LE driver -j"$jobs" --output-on-failure --timeout 900
