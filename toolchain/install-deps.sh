@@ -10,6 +10,8 @@ packages=(
   libgpiod-dev libhidapi-dev libusb-1.0-0-dev
   libdrm-dev libgbm-dev libegl-dev libgles-dev libegl-mesa0
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the libFuzzer targets (toolchain/fuzz.sh, run by CI)
+  clang libclang-rt-14-dev
   # the qemu guest of tests/driver (real kernel drivers: vivid, uhid, gpio-sim, vkms)
   qemu-system-x86 busybox-static kmod linux-headers-amd64 linux-source-6.1 bc
   v4l-utils gpiod libdrm-tests udev

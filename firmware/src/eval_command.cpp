@@ -208,7 +208,9 @@ int run_eval_command(const Args& args) {
         r.regions = eval::score_regions(gt, frames);
     } else if (!masks.empty()) {
         std::vector<eval::TruthFrame> gt;
-        for (const auto& [frame, file] : masks) {
+        for (const auto& entry : masks) {
+            const std::int64_t frame = entry.first;  // (a plain variable: lambdas may not capture bindings in clang 14)
+            const std::string& file = entry.second;
             eval::ToolMask mask;
             if (!eval::read_tool_mask(file, mask, error)) {
                 std::fprintf(stderr, "endotower eval: %s\n", error.c_str());
