@@ -1,5 +1,6 @@
 // The trace format: JSON building, writing atomically, reading back.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -84,7 +85,7 @@ TEST(TraceReader, ParsesEveryDocumentedField) {
 }
 
 TEST(TraceReader, NamesTheBadFieldAndLine) {
-    const fs::path p = fs::temp_directory_path() / "endotower_bad_trace.jsonl";
+    const fs::path p = fs::temp_directory_path() / ("endotower_bad_trace_" + std::to_string(::getpid()) + ".jsonl");
     {
         std::ofstream f(p);
         f << R"({"frame":0,"seq":0,"capture_ns":0,"present_ns":1,"latency_ns":1,"late":false,"passthrough":false})"
@@ -105,7 +106,7 @@ TEST(TraceReader, NamesTheBadFieldAndLine) {
 }
 
 TEST(TraceWriter, WritesAtomicallyAndKeepsTheOldFileOnAbandon) {
-    const fs::path dir = fs::temp_directory_path() / "endotower_trace_writer";
+    const fs::path dir = fs::temp_directory_path() / ("endotower_trace_writer_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     const std::string path = (dir / "t.jsonl").string();
@@ -143,7 +144,7 @@ TEST(TraceWriter, DiskFullIsReportedAndNothingHalfWrittenIsLeft) {
     if (!fs::exists("/dev/full")) GTEST_SKIP() << "/dev/full absent";
     // /dev/full accepts open and fails every write with ENOSPC. Write through a
     // symlink named like a trace so that PATH.tmp is the full device.
-    const fs::path dir = fs::temp_directory_path() / "endotower_trace_full";
+    const fs::path dir = fs::temp_directory_path() / ("endotower_trace_full_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     fs::create_symlink("/dev/full", dir / "t.jsonl.tmp");
