@@ -16,6 +16,28 @@ namespace {
 
 using namespace endotower;
 
+// Tracks the frames round-robin, one per iteration; median and p99 per frame, and the
+// fraction of frames where a tool was found.
+void time_tracking(benchmark::State& state, vision::ToolTracker& tracker, const std::vector<cv::Mat>& frames,
+                   const hal::FrameFormat& fmt) {
+    std::array<vision::ToolEstimate, vision::ToolTracker::kMaxTools> out{};
+    std::vector<double> ms;
+    ms.reserve(100000);
+    std::size_t i = 0, found = 0;
+    for (auto _ : state) {
+        hal::Frame f;
+        f.format = fmt;
+        f.data = frames[i++ % frames.size()].data;
+        const auto t0 = std::chrono::steady_clock::now();
+        found += tracker.track(f, out);
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    state.counters["median_ms"] = ms[ms.size() / 2];
+    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+    state.counters["found_fraction"] = static_cast<double>(found) / static_cast<double>(ms.size());
+}
+
 cv::Mat frame_1080p(int t) {
     cv::Mat img(1080, 1920, CV_8UC3);
     cv::randn(img, cv::Scalar(85, 75, 185), cv::Scalar(8, 8, 8));
@@ -33,22 +55,7 @@ void BM_KalmanTracker1080p(benchmark::State& state) {
     tracker.configure(fmt);
     std::vector<cv::Mat> frames;
     for (int t = 0; t < 20; ++t) frames.push_back(frame_1080p(t));
-    std::array<vision::ToolEstimate, vision::ToolTracker::kMaxTools> out{};
-    std::vector<double> ms;
-    ms.reserve(100000);
-    std::size_t i = 0, found = 0;
-    for (auto _ : state) {
-        hal::Frame f;
-        f.format = fmt;
-        f.data = frames[i++ % frames.size()].data;
-        const auto t0 = std::chrono::steady_clock::now();
-        found += tracker.track(f, out);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    }
-    std::sort(ms.begin(), ms.end());
-    state.counters["median_ms"] = ms[ms.size() / 2];
-    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
-    state.counters["found_fraction"] = static_cast<double>(found) / static_cast<double>(ms.size());
+    time_tracking(state, tracker, frames, fmt);
 }
 BENCHMARK(BM_KalmanTracker1080p)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
@@ -77,22 +84,7 @@ void BM_LikelihoodTracker1080p(benchmark::State& state) {
         img.setTo(cv::Scalar(128, 126, 124), bar & circle);
         frames.push_back(img);
     }
-    std::array<vision::ToolEstimate, vision::ToolTracker::kMaxTools> out{};
-    std::vector<double> ms;
-    ms.reserve(100000);
-    std::size_t i = 0, found = 0;
-    for (auto _ : state) {
-        hal::Frame f;
-        f.format = fmt;
-        f.data = frames[i++ % frames.size()].data;
-        const auto t0 = std::chrono::steady_clock::now();
-        found += tracker.track(f, out);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    }
-    std::sort(ms.begin(), ms.end());
-    state.counters["median_ms"] = ms[ms.size() / 2];
-    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
-    state.counters["found_fraction"] = static_cast<double>(found) / static_cast<double>(ms.size());
+    time_tracking(state, tracker, frames, fmt);
 }
 BENCHMARK(BM_LikelihoodTracker1080p)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 

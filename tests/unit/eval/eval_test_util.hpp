@@ -3,7 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <array>
 
 #include <cstdio>
 #include <filesystem>
@@ -63,6 +66,23 @@ inline std::string write_lines(const fs::path& path, const std::vector<std::stri
     std::ofstream out(path);
     for (const std::string& l : lines) out << l << "\n";
     return path.string();
+}
+
+// `endotower eval ARGS` with stdout and stderr captured, and its exit status.
+struct CommandRun {
+    int status = -1;
+    std::string output;
+};
+inline CommandRun run_eval(const std::string& args) {
+    const std::string cmd = std::string(ENDOTOWER_BINARY) + " eval " + args + " 2>&1";
+    CommandRun r;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    if (p == nullptr) return r;
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
+    const int st = ::pclose(p);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
 }
 
 }  // namespace endotower::eval::test

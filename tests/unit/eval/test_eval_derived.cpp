@@ -92,21 +92,6 @@ TEST(ParsePolygon, AcceptsPairsRejectsMalformed) {
     EXPECT_NE(error.find("'3;4'"), std::string::npos);
 }
 
-struct CommandRun {
-    int status = -1;
-    std::string output;
-};
-CommandRun run_eval(const std::string& args) {
-    const std::string cmd = std::string(ENDOTOWER_BINARY) + " eval " + args + " 2>&1";
-    CommandRun r;
-    FILE* p = ::popen(cmd.c_str(), "r");
-    if (p == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
-    const int st = ::pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
-}
 
 TEST(EvalCommand, MaskTruthScoresTheMaskedFrameByTheBookRule) {
     const fs::path d = temp_dir("cli_mask");
