@@ -1,6 +1,8 @@
 // End-to-end: the `endotower sim` command on recordings, checked frame by frame.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include "endotower_command.hpp"
 #include <unistd.h>
 
 #include <array>
@@ -18,22 +20,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-    int status = -1;
-    std::string output;  // stdout and stderr
-};
-
-CommandResult run(const std::string& args) {
-    const std::string cmd = std::string(ENDOTOWER_BINARY) + " " + args + " 2>&1";
-    CommandResult r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (p == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
-    const int st = pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
-}
+using CommandResult = endotower::test::CommandRun;
+CommandResult run(const std::string& args) { return endotower::test::run_endotower(args); }
 
 fs::path fresh_dir(const std::string& name) {
     // Per process: several checkouts may run the suite at once on one machine.

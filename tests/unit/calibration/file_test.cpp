@@ -113,7 +113,7 @@ target: {kind: squares, pitch_mm: 8, size_mm: 4, cols: 15, rows: 13, distances_m
     c.book = RadialPolynomial{c.distortion, cam.cx, cam.cy};
     Undistorter u;
     ASSERT_TRUE(u.init(c, error)) << error;
-    for (const auto [x, y] :
+    for (const auto& [x, y] :
          std::vector<std::pair<double, double>>{{10, 10}, {320, 240}, {600, 100}, {150, 420}}) {
         double xd, yd;
         cam.distort(x, y, xd, yd);
@@ -161,7 +161,7 @@ TEST(Undistorter, PinholeRemapMatchesTheExactMap) {
     Undistorter u;
     std::string error;
     ASSERT_TRUE(u.init(c, error)) << error;
-    for (const auto [fmt, channels] :
+    for (const auto& [fmt, channels] :
          std::vector<std::pair<hal::PixelFormat, int>>{{hal::PixelFormat::kGray8, 1},
                                                        {hal::PixelFormat::kBgr24, 3},
                                                        {hal::PixelFormat::kBgra32, 4}}) {

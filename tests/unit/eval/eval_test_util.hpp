@@ -3,16 +3,16 @@
 
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include "endotower_command.hpp"
 
 namespace endotower::eval::test {
 
@@ -68,21 +68,8 @@ inline std::string write_lines(const fs::path& path, const std::vector<std::stri
     return path.string();
 }
 
+using endotower::test::CommandRun;
 // `endotower eval ARGS` with stdout and stderr captured, and its exit status.
-struct CommandRun {
-    int status = -1;
-    std::string output;
-};
-inline CommandRun run_eval(const std::string& args) {
-    const std::string cmd = std::string(ENDOTOWER_BINARY) + " eval " + args + " 2>&1";
-    CommandRun r;
-    FILE* p = ::popen(cmd.c_str(), "r");
-    if (p == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
-    const int st = ::pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
-}
+inline CommandRun run_eval(const std::string& args) { return endotower::test::run_endotower("eval " + args); }
 
 }  // namespace endotower::eval::test

@@ -106,7 +106,9 @@ TEST(MidlineKalman, TracksAConstantVelocityLine) {
         const Segment z = truth(t);
         // The prior predicts where the line went; after a few frames it is close.
         const double err = std::max(pred.distance(z.a), pred.distance(z.b));
-        if (t > 6) EXPECT_LT(err, 3.0) << t;
+        if (t > 6) {
+            EXPECT_LT(err, 3.0) << t;
+        }
         last_err = err;
         EXPECT_TRUE(kf.gate(z)) << t;
         const SlopeLine post = kf.correct(z);

@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "endotower_command.hpp"
 #include "region_test_util.hpp"
 
 namespace endotower::vision {
@@ -21,22 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandRun {
-    int status = -1;
-    std::string output;  // stdout and stderr
-};
-
-CommandRun run(const std::string& args) {
-    const std::string cmd = std::string(ENDOTOWER_BINARY) + " " + args + " 2>&1";
-    CommandRun r;
-    FILE* p = ::popen(cmd.c_str(), "r");
-    if (p == nullptr) return r;
-    std::array<char, 4096> buf{};
-    while (std::fgets(buf.data(), buf.size(), p) != nullptr) r.output += buf.data();
-    const int st = ::pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
-}
+using endotower::test::CommandRun;
+CommandRun run(const std::string& args) { return endotower::test::run_endotower(args); }
 
 fs::path temp_dir(const std::string& name) {
     const fs::path d = fs::temp_directory_path() /
