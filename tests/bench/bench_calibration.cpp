@@ -52,7 +52,7 @@ void record(benchmark::State& state, std::vector<double>& ms, std::int64_t alloc
 
 // Arg 0: the shipped fixed-point maps (Undistorter); 1: OpenCV remap with float maps
 // (its thread pool); 2: the same on one thread; 3: OpenCV remap with fixed-point maps,
-// one thread.
+// one thread; 4: Undistorter with its helper thread (set_threads(2)).
 void BM_Undistort1080p(benchmark::State& state) {
     const calibration::Calibration c = scope_1080p();
     calibration::Undistorter u;
@@ -77,6 +77,7 @@ void BM_Undistort1080p(benchmark::State& state) {
     fo.data = out.data;
     std::vector<double> ms;
     ms.reserve(100000);
+    if (state.range(0) == 4) u.set_threads(2);
     u.apply(fi, fo);  // warm-up
     const std::int64_t a0 = bench::allocations();
     std::int64_t n = 0;
@@ -84,7 +85,7 @@ void BM_Undistort1080p(benchmark::State& state) {
     if (state.range(0) >= 2) cv::setNumThreads(1);
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
-        if (state.range(0) == 0)
+        if (state.range(0) == 0 || state.range(0) == 4)
             u.apply(fi, fo);
         else if (state.range(0) == 3)
             cv::remap(in, out, m1, m2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
@@ -103,6 +104,7 @@ BENCHMARK(BM_Undistort1080p)
     ->Arg(1)
     ->Arg(2)
     ->Arg(3)
+    ->Arg(4)
     ->Unit(benchmark::kMillisecond)
     ->MinTime(3.0);
 

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <mutex>
+#include <thread>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -21,6 +24,33 @@ struct Undistorter::Impl {
         int y, x0, x1;  // [x0, x1)
     };
     std::vector<Span> spans;
+    // Rows [0, split_row) are one half of the work, [split_row, height) the other;
+    // spans[0, split_span) lie in the first.
+    int split_row = 0;
+    std::size_t split_span = 0;
+
+    // The helper thread that remaps the second half (set_threads(2)); started once.
+    struct Helper {
+        std::mutex mutex;
+        std::condition_variable cv;
+        std::thread thread;
+        const hal::Frame* in = nullptr;
+        hal::Frame* out = nullptr;
+        int type = 0;
+        std::uint64_t posted = 0, done = 0;
+        bool quit = false;
+    };
+    std::unique_ptr<Helper> helper;
+
+    ~Impl() {
+        if (!helper) return;
+        {
+            std::lock_guard lock(helper->mutex);
+            helper->quit = true;
+        }
+        helper->cv.notify_all();
+        helper->thread.join();
+    }
 };
 
 namespace {
@@ -80,8 +110,10 @@ int remap_run_sse2(const Undistorter::Impl&, const hal::Frame& in, const cv::Vec
 }
 #endif
 
+// Remaps spans[first, last) and clears the other pixels of rows [row0, row1).
 template <int C>
-void remap_spans(const Undistorter::Impl& m, const hal::Frame& in, hal::Frame& out) {
+void remap_spans(const Undistorter::Impl& m, const hal::Frame& in, hal::Frame& out,
+                 std::size_t first, std::size_t last, int row0, int row1) {
     const std::size_t ss = in.format.stride;
     const std::uint8_t* src = in.data;
     int y = -1, x_done = 0;
@@ -90,8 +122,9 @@ void remap_spans(const Undistorter::Impl& m, const hal::Frame& in, hal::Frame& o
     auto finish_row = [&]() {
         if (row) std::memset(row + C * x_done, 0, static_cast<std::size_t>(C) * (w - x_done));
     };
-    int next_row = 0;
-    for (const auto& sp : m.spans) {
+    int next_row = row0;
+    for (std::size_t i = first; i < last; ++i) {
+        const auto& sp = m.spans[i];
         if (sp.y != y) {
             finish_row();
             for (; next_row < sp.y; ++next_row)
@@ -124,11 +157,65 @@ void remap_spans(const Undistorter::Impl& m, const hal::Frame& in, hal::Frame& o
         x_done = sp.x1;
     }
     finish_row();
-    for (; next_row < out.format.height; ++next_row)
+    for (; next_row < row1; ++next_row)
         std::memset(out.data + next_row * out.format.stride, 0, static_cast<std::size_t>(C) * w);
 }
 
+void remap_part(const Undistorter::Impl& m, int type, const hal::Frame& in, hal::Frame& out,
+                std::size_t first, std::size_t last, int row0, int row1) {
+    switch (CV_ELEM_SIZE(type)) {
+        case 1:
+            remap_spans<1>(m, in, out, first, last, row0, row1);
+            break;
+        case 3:
+            remap_spans<3>(m, in, out, first, last, row0, row1);
+            break;
+        default:
+            remap_spans<4>(m, in, out, first, last, row0, row1);
+            break;
+    }
+}
+
+void helper_loop(Undistorter::Impl& m) {
+    Undistorter::Impl::Helper& h = *m.helper;
+    std::unique_lock lock(h.mutex);
+    for (;;) {
+        h.cv.wait(lock, [&] { return h.quit || h.posted != h.done; });
+        if (h.quit) return;
+        const hal::Frame& in = *h.in;
+        hal::Frame& out = *h.out;
+        const int type = h.type;
+        lock.unlock();
+        remap_part(m, type, in, out, m.split_span, m.spans.size(), m.split_row, in.format.height);
+        lock.lock();
+        h.done = h.posted;
+        h.cv.notify_all();
+    }
+}
+
 }  // namespace
+
+bool Undistorter::set_threads(int threads) {
+    if (!impl_ || threads < 1 || threads > 2) return false;
+    if ((threads == 2) == static_cast<bool>(impl_->helper)) return true;
+    if (threads == 1) {
+        {
+            std::lock_guard lock(impl_->helper->mutex);
+            impl_->helper->quit = true;
+        }
+        impl_->helper->cv.notify_all();
+        impl_->helper->thread.join();
+        impl_->helper.reset();
+        return true;
+    }
+    impl_->helper = std::make_unique<Impl::Helper>();
+    impl_->helper->thread = std::thread(helper_loop, std::ref(*impl_));
+    return true;
+}
+
+int Undistorter::threads() const {
+    return impl_ && impl_->helper ? 2 : 1;
+}
 
 Undistorter::Undistorter() = default;
 Undistorter::~Undistorter() = default;
@@ -226,7 +313,22 @@ bool Undistorter::init(const Calibration& c, std::string& error) {
             if (!ok && start >= 0) impl->spans.push_back({y, start, x}), start = -1;
         }
     }
+    // Halve the work by pixels, not rows: the field of view is a disc.
+    std::size_t total = 0, acc = 0;
+    for (const auto& sp : impl->spans) total += static_cast<std::size_t>(sp.x1 - sp.x0);
+    impl->split_span = impl->spans.size();
+    impl->split_row = c.height;
+    for (std::size_t i = 0; i < impl->spans.size(); ++i) {
+        if (2 * acc >= total && (i == 0 || impl->spans[i].y != impl->spans[i - 1].y)) {
+            impl->split_span = i;
+            impl->split_row = impl->spans[i].y;
+            break;
+        }
+        acc += static_cast<std::size_t>(impl->spans[i].x1 - impl->spans[i].x0);
+    }
+    const int threads = impl_ ? this->threads() : 1;
     impl_ = std::move(impl);
+    if (threads == 2) set_threads(2);
     return true;
 }
 
@@ -249,17 +351,21 @@ bool Undistorter::apply(const hal::Frame& in, hal::Frame& out) const {
         default:
             return false;
     }
-    const int px = CV_ELEM_SIZE(type);
-    switch (px) {
-        case 1:
-            remap_spans<1>(*impl_, in, out);
-            break;
-        case 3:
-            remap_spans<3>(*impl_, in, out);
-            break;
-        default:
-            remap_spans<4>(*impl_, in, out);
-            break;
+    Impl& m = *impl_;
+    if (m.helper) {
+        {
+            std::lock_guard lock(m.helper->mutex);
+            m.helper->in = &in;
+            m.helper->out = &out;
+            m.helper->type = type;
+            ++m.helper->posted;
+        }
+        m.helper->cv.notify_all();
+        remap_part(m, type, in, out, 0, m.split_span, 0, m.split_row);
+        std::unique_lock lock(m.helper->mutex);
+        m.helper->cv.wait(lock, [&] { return m.helper->done == m.helper->posted; });
+    } else {
+        remap_part(m, type, in, out, 0, m.spans.size(), 0, in.format.height);
     }
     return true;
 }

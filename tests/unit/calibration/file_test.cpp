@@ -206,6 +206,43 @@ TEST(Undistorter, PinholeRemapMatchesTheExactMap) {
     EXPECT_FALSE(u.apply(a, b));
 }
 
+// The helper thread remaps half the rows: the output is the one-thread output, byte
+// for byte (every pixel, the black border included), frame after frame, with the
+// thread switched on and off again and the maps rebuilt under it.
+TEST(Undistorter, TwoThreadsGiveTheSameBytes) {
+    Calibration c = sample();
+    c.model = LensModel::kPinhole;
+    Undistorter one, two;
+    std::string error;
+    ASSERT_TRUE(one.init(c, error)) << error;
+    ASSERT_TRUE(two.init(c, error)) << error;
+    EXPECT_FALSE(two.set_threads(3));
+    ASSERT_TRUE(two.set_threads(2));
+    EXPECT_EQ(two.threads(), 2);
+    const int stride = c.width * 3;
+    std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height), a(in.size(), 1), b(in.size(), 2);
+    hal::Frame fi, fa, fb;
+    fi.format = fa.format = fb.format = {c.width, c.height, stride, hal::PixelFormat::kBgr24};
+    fi.data = in.data();
+    fa.data = a.data();
+    fb.data = b.data();
+    for (int frame = 0; frame < 6; ++frame) {
+        for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<std::uint8_t>((i * 7 + frame * 31) ^ (i >> 9));
+        if (frame == 3) {
+            ASSERT_TRUE(two.init(c, error)) << error;  // keeps its thread
+        }
+        ASSERT_TRUE(one.apply(fi, fa));
+        ASSERT_TRUE(two.apply(fi, fb));
+        ASSERT_EQ(two.threads(), 2);
+        ASSERT_TRUE(a == b) << "frame " << frame;
+    }
+    ASSERT_TRUE(two.set_threads(1));
+    EXPECT_EQ(two.threads(), 1);
+    std::fill(b.begin(), b.end(), 9);
+    ASSERT_TRUE(two.apply(fi, fb));
+    EXPECT_TRUE(a == b);
+}
+
 TEST(Undistorter, FoldingBookPolynomialIsRefused) {
     Calibration c = sample();
     c.model = LensModel::kBook;

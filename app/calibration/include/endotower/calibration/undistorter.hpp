@@ -28,7 +28,12 @@ public:
     bool init(const Calibration& c, std::string& error);
     // Remaps `in` into `out`: same size and format (bgr24, rgb24, bgra32 or gray8),
     // both buffers owned by the caller. Allocates nothing; false on a mismatch.
+    // With two threads, the rows are split in halves of equal pixel count and a helper
+    // thread (started once by set_threads) remaps one while the caller does the other.
     bool apply(const hal::Frame& in, hal::Frame& out) const;
+    // 1 (default) or 2 threads for apply(); after init(). Not concurrent with apply().
+    bool set_threads(int threads);
+    int threads() const;
     // Where corrected pixel (x, y) samples the input (the exact map, before rounding).
     Point2 source_of(double x, double y) const;
     int width() const;
