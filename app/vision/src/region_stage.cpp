@@ -52,7 +52,102 @@ void draw_region(app::OverlayCanvas& canvas, const RegionEstimate& e, int thickn
 
 }  // namespace
 
+void RegionStage::enable_tool_marking(const RegionMarkerParams& params,
+                                      std::function<bool(Point2&)> tip) {
+    marker_.set_params(params);
+    tip_ = std::move(tip);
+}
+
+void RegionStage::mark_with_tool(app::AnalysisContext& ctx) {
+    Point2 tip;
+    const bool has_tip = tip_(tip);
+    const char* event = nullptr;
+    std::span<const hal::ControlEvent> events = ctx.events;
+    if (!marker_.marking()) {
+        // A long press starts an outline; what follows it in this frame is its.
+        for (std::size_t i = 0; i < events.size(); ++i)
+            if (events[i].button == 0 && events[i].kind == hal::ControlEvent::Kind::kLongPress) {
+                marker_.begin();
+                event = "started";
+                events = events.subspan(i + 1);
+                break;
+            }
+    }
+    switch (marker_.update(has_tip ? &tip : nullptr, events, ctx.frame.capture_ns)) {
+        case RegionMarker::Event::kVertex:
+            event = "vertex";
+            break;
+        case RegionMarker::Event::kCancelled:
+            event = "cancelled";
+            break;
+        case RegionMarker::Event::kClosed: {
+            event = "closed";
+            std::array<Point2, RegionMarker::kMaxVertices> poly{};
+            std::size_t n = 0;
+            marker_.take_polygon(poly, n);
+            std::string error;
+            if (tracker_.mark(next_id_, std::span<const Point2>(poly.data(), n), ctx.frame, error))
+                ++next_id_;
+            else {
+                event = "refused";
+                errors_.push_back("frame " + std::to_string(ctx.frame.sequence) + ": " + error);
+            }
+            break;
+        }
+        default:
+            break;
+    }
+    const auto vertices = marker_.vertices();
+    if (marker_.marking() && ctx.overlay.width() > 0) {
+        cv::Mat rgba(ctx.overlay.height(), ctx.overlay.width(), CV_8UC4, ctx.overlay.row(0),
+                     static_cast<std::size_t>(ctx.overlay.layer().stride));
+        const cv::Scalar colour(255, 255, 255, 230);
+        double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+        auto grow = [&](Point2 p) {
+            x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
+            y1 = std::max(y1, p.y);
+        };
+        for (std::size_t i = 0; i < vertices.size(); ++i) {
+            const cv::Point a(static_cast<int>(vertices[i].x), static_cast<int>(vertices[i].y));
+            cv::circle(rgba, a, 2 * thickness_, colour, cv::FILLED);
+            if (i > 0)
+                cv::line(rgba,
+                         cv::Point(static_cast<int>(vertices[i - 1].x),
+                                   static_cast<int>(vertices[i - 1].y)),
+                         a, colour, thickness_);
+            grow(vertices[i]);
+        }
+        if (has_tip) {
+            // The dwell: an arc that fills as the tip holds still.
+            const int r = 8 * thickness_;
+            const cv::Point c(static_cast<int>(tip.x), static_cast<int>(tip.y));
+            cv::ellipse(rgba, c, {r, r}, -90, 0, 360 * marker_.dwell_progress(), colour,
+                        thickness_);
+            grow({tip.x - r, tip.y - r});
+            grow({tip.x + r, tip.y + r});
+        }
+        if (x1 >= x0) {
+            const int pad = 4 * thickness_;
+            auto clampi = [](double v) { return static_cast<int>(std::clamp(v, -1e6, 1e6)); };
+            const int left = clampi(std::floor(x0)) - pad, top = clampi(std::floor(y0)) - pad;
+            ctx.overlay.mark({left, top, clampi(std::ceil(x1)) + pad - left + 1,
+                              clampi(std::ceil(y1)) + pad - top + 1});
+        }
+    }
+    ctx.trace.begin_object("region_marking")
+        .field("marking", marker_.marking())
+        .begin_array("vertices");
+    for (const Point2& v : vertices) ctx.trace.begin_array().value(v.x).value(v.y).end_array();
+    ctx.trace.end_array();
+    if (event != nullptr)
+        ctx.trace.field("event", event);
+    else
+        ctx.trace.null_field("event");
+    ctx.trace.end_object();
+}
+
 void RegionStage::schedule(RegionMark mark) {
+    next_id_ = std::max(next_id_, mark.id + 1);  // regions marked with the tool come after
     const auto at = std::upper_bound(
         pending_.begin() + static_cast<std::ptrdiff_t>(next_), pending_.end(), mark.frame,
         [](std::int64_t f, const RegionMark& m) { return f < m.frame; });
@@ -72,6 +167,7 @@ void RegionStage::process(app::AnalysisContext& ctx) {
         if (!tracker_.mark(m.id, m.polygon, ctx.frame, error))
             errors_.push_back("frame " + std::to_string(seq) + ": " + error);
     }
+    if (tip_) mark_with_tool(ctx);
     if (tracker_.size() == 0) return;
     const std::size_t n = tracker_.track(ctx.frame, estimates_);
     ctx.trace.begin_array("regions");

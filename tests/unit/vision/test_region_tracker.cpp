@@ -161,6 +161,68 @@ TEST(RegionTracker, LostWhenTheRegionLeavesThePictureAndRecoveredWhenItReturns) 
     EXPECT_LT(corner_error(out[0], kSquare), 1.0);
 }
 
+// Marking with the tool: a long press starts the outline, the tip holds still 2 s at
+// each corner of kSquare (25 fps frames, 40 ms apart), returns to the first corner to
+// close it; the region is then tracked as the view pans, exactly where it was drawn.
+TEST(RegionStage, ARegionOutlinedWithTheToolTipIsTracked) {
+    const cv::Mat scene = texture(900, 480, 17);
+    RegionTracker t;
+    RegionStage stage(t);
+    Point2 tip;
+    bool tool = false;
+    stage.enable_tool_marking({}, [&](Point2& out) {
+        out = tip;
+        return tool;
+    });
+    stage.configure({640, 480, 640 * 3, hal::PixelFormat::kBgr24});
+    app::OverlayCanvas canvas;
+    canvas.configure(640, 480);
+    app::JsonLine line;
+    std::uint64_t seq = 0;
+    std::string json;
+    auto step = [&](int pan, std::span<const hal::ControlEvent> events = {}) {
+        cv::Mat img = scene(cv::Rect(pan, 0, 640, 480)).clone();
+        canvas.clear();
+        line.clear();
+        line.begin_object();
+        app::AnalysisContext ctx{view(img, seq++), events, canvas, line, 0};
+        stage.process(ctx);
+        json = std::string(line.view());
+    };
+    step(0);
+    EXPECT_NE(json.find("\"region_marking\":{\"marking\":false"), std::string::npos) << json;
+    hal::ControlEvent lp;
+    lp.kind = hal::ControlEvent::Kind::kLongPress;
+    const std::array<hal::ControlEvent, 1> start{lp};
+    step(0, start);
+    EXPECT_NE(json.find("\"event\":\"started\""), std::string::npos) << json;
+    tool = true;
+    std::vector<Point2> corners = kSquare;
+    corners.push_back(kSquare[0]);  // back to the first corner
+    int vertices = 0, closed = 0;
+    for (const Point2& c : corners) {
+        tip = c;
+        // 2 s = 50 frames after the first still frame: the 51st places the vertex.
+        for (int i = 0; i < 51; ++i) {
+            step(0);
+            vertices += json.find("\"event\":\"vertex\"") != std::string::npos;
+            closed += json.find("\"event\":\"closed\"") != std::string::npos;
+        }
+    }
+    EXPECT_EQ(vertices, 4);
+    EXPECT_EQ(closed, 1);
+    EXPECT_TRUE(stage.errors().empty());
+    tool = false;
+    for (int pan = 0; pan <= 200; pan += 40) step(pan);
+    EXPECT_NE(json.find("\"state\":\"tracked\""), std::string::npos) << json;
+    std::array<RegionEstimate, 1> now{};
+    cv::Mat img = scene(cv::Rect(200, 0, 640, 480)).clone();
+    ASSERT_EQ(t.track(view(img, seq), now), 1u);
+    std::vector<Point2> truth = kSquare;
+    for (Point2& v : truth) v.x -= 200;
+    EXPECT_LT(corner_error(now[0], truth), 1.0);
+}
+
 // An image pair of different sizes: the second is the first scaled by 1.25 and
 // shifted; the region comes back in the second image's own pixels.
 TEST(RegionTracker, ImagePairOfDifferentSizes) {

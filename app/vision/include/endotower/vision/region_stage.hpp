@@ -6,14 +6,25 @@
 // in the input's own pixel coordinates. The overlay (the outline, its corners and a
 // marker at its centre) is drawn only while the region is tracked: hidden, never
 // misplaced, when it is lost. Borrows the tracker.
+//
+// Marking with the tool (enable_tool_marking): a long press of the handle starts an
+// outline (RegionMarker: vertices by button press or a still tip, closed by returning
+// to the first vertex or a long press); the closed polygon becomes a new region on
+// that frame. The outline so far, and the dwell progress at the tip, are drawn; the
+// trace member every frame while enabled:
+//   "region_marking": {"marking", "vertices": [[x, y], ...], "event": "started" |
+//                      "vertex" | "closed" | "cancelled" | "refused" | null}
+// ("refused": the closed polygon could not be tracked, e.g. too few features).
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "endotower/app/analysis_stage.hpp"
+#include "endotower/vision/region_marker.hpp"
 #include "endotower/vision/region_tracker.hpp"
 
 namespace endotower::vision {
@@ -31,6 +42,9 @@ public:
     void schedule(RegionMark mark);
     // After the run: marks that failed ("frame N: region 2: ..."), one per line.
     const std::vector<std::string>& errors() const { return errors_; }
+    // `tip` fills the tool tip of this frame (frame pixels), false when there is no tool;
+    // called once per frame on the analysis thread after the tracker ran, must not allocate.
+    void enable_tool_marking(const RegionMarkerParams& params, std::function<bool(Point2&)> tip);
 
     std::string_view name() const override { return "regions"; }
     void configure(const hal::FrameFormat& format) override;
@@ -43,6 +57,10 @@ private:
     std::vector<std::string> errors_;
     std::array<RegionEstimate, RegionTracker::kMaxRegions> estimates_{};
     int thickness_ = 2;
+    void mark_with_tool(app::AnalysisContext& ctx);
+    std::function<bool(Point2&)> tip_;
+    RegionMarker marker_;
+    int next_id_ = 0;
 };
 
 }  // namespace endotower::vision
