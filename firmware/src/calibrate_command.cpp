@@ -8,6 +8,7 @@
 #include <regex>
 #include <string>
 
+#include "calibrate_live.hpp"
 #include "commands.hpp"
 #include "endotower/calibration/book_calibration.hpp"
 #include "endotower/calibration/calibration_file.hpp"
@@ -23,13 +24,18 @@ using namespace endotower::calibration;
 
 void print_calibrate_help() {
     std::printf(
-        "usage: endotower calibrate --images DIR --target TARGET [--spacing MM|A,B]\n"
+        "usage: endotower calibrate --images DIR|--live BOARD --target TARGET [--spacing MM|A,B]\n"
         "                           [--model pinhole|fisheye|book] --out FILE [--scope NAME]\n"
         "                           [--white DIR] [--chart DIR] [--marker DIR] [options]\n\n"
         "Calibrates the endoscope from image folders and writes one calibration file per\n"
         "scope (JSON: fx, fy, cx, cy, distortion, rms, ...; docs/calibration.md), atomically:\n"
         "on any error the previous file is untouched.\n\n"
         "  --images DIR     images of the target (every png/jpg/bmp/tif in DIR, one size)\n"
+        "  --live BOARD     instead of --images: views of the target from the board's camera\n"
+        "                   (its capture: device, or its sim.input replayed), kept as the\n"
+        "                   technician moves and tilts the target (OpenCV targets only)\n"
+        "  --views N        --live: views to keep, default 15 (at least 4)\n"
+        "  --save-views DIR --live: also write the kept views there as PNG\n"
         "  --target T       chessboard:COLSxROWS (inner corners) | circles:COLSxROWS |\n"
         "                   asymmetric-circles:COLSxROWS | charuco:COLSxROWS[:DICT] |\n"
         "                   squares (the book's chart: --images are chart images, --model book)\n"
@@ -143,7 +149,8 @@ void print_book(const BookResult& b, int order) {
 
 int run_calibrate_command(const Args& args) {
     std::string images, target, spacing, model_name = "pinhole", out, scope, white, chart, marker;
-    double chart_pitch = 8, reference_mm = 50, order = 3, marker_mm = 10;
+    std::string live_board, save_views;
+    double chart_pitch = 8, reference_mm = 50, order = 3, marker_mm = 10, live_views = 15;
     bool zero_tangent = false;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& k = args[i];
@@ -155,10 +162,10 @@ int run_calibrate_command(const Args& args) {
             zero_tangent = true;
             continue;
         }
-        static const char* kValued[] = {"--images",      "--target",       "--spacing", "--model",
-                                        "--out",         "--scope",        "--white",   "--chart",
-                                        "--chart-pitch", "--reference-mm", "--order",   "--marker",
-                                        "--marker-mm"};
+        static const char* kValued[] = {
+            "--images",    "--target", "--spacing",     "--model",        "--out",   "--scope",
+            "--white",     "--chart",  "--chart-pitch", "--reference-mm", "--order", "--marker",
+            "--marker-mm", "--live",   "--views",       "--save-views"};
         bool known = false;
         for (const char* o : kValued) known = known || k == o;
         if (!known) return usage_error("unknown option '" + k + "'");
@@ -166,6 +173,13 @@ int run_calibrate_command(const Args& args) {
         const std::string& v = args[++i];
         if (k == "--images")
             images = v;
+        else if (k == "--live")
+            live_board = v;
+        else if (k == "--save-views")
+            save_views = v;
+        else if (k == "--views" &&
+                 (!parse_number(v, 4, 500, live_views) || live_views != std::floor(live_views)))
+            return usage_error("--views needs a whole number 4..500, got '" + v + "'");
         else if (k == "--target")
             target = v;
         else if (k == "--spacing")
@@ -192,7 +206,12 @@ int run_calibrate_command(const Args& args) {
                                     static_cast<int>(order) % 2 == 0))
             return usage_error("--order needs an odd whole number 1..9, got '" + v + "'");
     }
-    if (images.empty()) return usage_error("give --images DIR");
+    if (images.empty() && live_board.empty())
+        return usage_error("give --images DIR or --live BOARD");
+    if (!images.empty() && !live_board.empty())
+        return usage_error("give --images DIR or --live BOARD, not both");
+    if (live_board.empty() && !save_views.empty())
+        return usage_error("--save-views goes with --live");
     if (target.empty()) return usage_error("give --target (e.g. chessboard:9x6)");
     if (out.empty()) return usage_error("give --out FILE");
     LensModel model;
@@ -204,6 +223,9 @@ int run_calibrate_command(const Args& args) {
     const bool squares = spec.kind == TargetKind::kSquares;
     if (squares && model != LensModel::kBook)
         return usage_error("the squares chart is the book's method: add --model book");
+    if (squares && !live_board.empty())
+        return usage_error(
+            "--live takes OpenCV's targets; the book's squares chart takes image folders");
     if (squares && !spacing.empty()) chart_pitch = spec.spacing_a;
     if (model == LensModel::kBook && white.empty())
         return usage_error("--model book needs --white DIR (the image centre)");
@@ -238,13 +260,28 @@ int run_calibrate_command(const Args& args) {
     std::vector<View> views;
     if (!squares) {
         std::vector<GrayImage> imgs;
-        if (!load_folder(images, imgs, error)) return input_error(error);
+        std::vector<std::string> missing;
+        if (!live_board.empty()) {
+            LiveViews live;
+            const LiveViewOptions lo{
+                .board = live_board, .views = static_cast<int>(live_views), .save_dir = save_views};
+            if (!capture_live_views(lo, spec, live, error)) return input_error(error);
+            if (live.views.size() < 4)
+                return input_error(live.source + ": only " + std::to_string(live.views.size()) +
+                                   " distinct views of the target in " +
+                                   std::to_string(live.frames) + " frames (need 4): is it " +
+                                   target + ", in focus, and moved between views?");
+            imgs = std::move(live.images);
+            views = std::move(live.views);
+        } else if (!load_folder(images, imgs, error)) {
+            return input_error(error);
+        }
         if (book && (imgs.front().width != book->width || imgs.front().height != book->height))
             return input_error(
                 imgs.front().name +
                 ": image size differs from the white-background images: mixed sizes");
-        std::vector<std::string> missing;
         for (const GrayImage& g : imgs) {
+            if (!live_board.empty()) break;  // detected while capturing
             View v;
             if (detect_target(g, spec, v, error))
                 views.push_back(std::move(v));

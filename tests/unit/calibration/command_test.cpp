@@ -4,6 +4,7 @@
 // endocal grid.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -201,6 +202,85 @@ TEST_F(CalibrateCommand, BothMethodsOnTheSimulatedScope) {
                           "reprojection RMS on the 8 target views",
                           "mean distance error on 6 chart images", "separation: 70.0 mm"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s;
+}
+
+// --live: the board's camera is a recording of the technician at work: each of the 8
+// chessboard poses held for 3 frames, a frame without the target between poses. Each
+// pose is kept once (a held pose is the same view), the calibration equals the
+// folder's within the sim's bounds, and the kept views are saved.
+TEST_F(CalibrateCommand, LiveViewsFromTheBoardsCamera) {
+    const fs::path live = dir / "live";
+    fs::remove_all(live);
+    fs::create_directories(live / "frames");
+    int frame = 0;
+    std::vector<fs::path> views;
+    for (const auto& e : fs::directory_iterator(d("chess"))) views.push_back(e.path());
+    std::sort(views.begin(), views.end());
+    const cv::Mat blank(cam.height, cam.width, CV_8UC1, cv::Scalar(0));
+    auto put = [&](const cv::Mat& m) {
+        char name[32];
+        std::snprintf(name, sizeof name, "%03d.png", frame++);
+        cv::imwrite((live / "frames" / name).string(), m);
+    };
+    for (const fs::path& v : views) {
+        const cv::Mat m = cv::imread(v.string(), cv::IMREAD_GRAYSCALE);
+        for (int i = 0; i < 3; ++i) put(m);
+        put(blank);
+    }
+    // 4 fps: every frame is looked at (250 ms apart).
+    std::ofstream(live / "board.yaml") << "board: live-test\nsim:\n  input: frames\n  fps: 4\n";
+    const fs::path out = live / "scope.json";
+    const CommandRun r = run("--live " + (live / "board.yaml").string() +
+                             " --target chessboard:9x6 --spacing 4 --views 20 --out " +
+                             out.string() + " --save-views " + (live / "kept").string());
+    ASSERT_EQ(r.rc, 0) << r.out;
+    for (int i = 1; i <= 8; ++i)
+        EXPECT_NE(r.out.find("view " + std::to_string(i) + "/20 kept: frame " +
+                             std::to_string(4 * (i - 1))),
+                  std::string::npos)
+            << i << "\n"
+            << r.out;
+    EXPECT_EQ(r.out.find("view 9/20"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("end of " + (live / "frames").string() + " after 32 frames"),
+              std::string::npos)
+        << r.out;
+    Calibration c;
+    std::string error;
+    ASSERT_TRUE(load_calibration(out.string(), c, error)) << error;
+    EXPECT_LE(c.rms, 0.5);
+    EXPECT_NEAR(c.fx, cam.fx, 0.01 * cam.fx);
+    EXPECT_NEAR(c.fy, cam.fy, 0.01 * cam.fy);
+    EXPECT_NEAR(c.cx, cam.cx, 2.0);
+    EXPECT_NEAR(c.cy, cam.cy, 2.0);
+    int saved = 0;
+    for (const auto& e : fs::directory_iterator(live / "kept"))
+        saved += e.path().extension() == ".png";
+    EXPECT_EQ(saved, 8);
+
+    // Bad input: a board without a camera, too few views, the squares chart; the
+    // previous file is untouched.
+    std::ofstream(live / "nocam.yaml") << "board: nocam\n";
+    const std::string before = read(out);
+    const CommandRun nocam = run("--live " + (live / "nocam.yaml").string() +
+                                 " --target chessboard:9x6 --out " + out.string());
+    EXPECT_EQ(nocam.rc, 2);
+    EXPECT_NE(nocam.out.find("the board has no camera"), std::string::npos) << nocam.out;
+    std::ofstream(live / "few.yaml") << "board: few\nsim:\n  input: frames\n  fps: 4\n";
+    fs::remove_all(live / "frames");
+    fs::create_directories(live / "frames");
+    frame = 0;
+    for (int i = 0; i < 6; ++i) put(blank);
+    const CommandRun few = run("--live " + (live / "few.yaml").string() +
+                               " --target chessboard:9x6 --out " + out.string());
+    EXPECT_EQ(few.rc, 2);
+    EXPECT_NE(few.out.find("only 0 distinct views of the target in 6 frames"), std::string::npos)
+        << few.out;
+    const CommandRun sq =
+        run("--live " + (live / "few.yaml").string() + " --target squares --model book --white " +
+            d("white") + " --out " + out.string());
+    EXPECT_EQ(sq.rc, 2);
+    EXPECT_NE(sq.out.find("--live takes OpenCV's targets"), std::string::npos) << sq.out;
+    EXPECT_EQ(read(out), before);
 }
 
 // The book's model alone from the square chart: centre and focal length of the sim.
