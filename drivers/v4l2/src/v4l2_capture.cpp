@@ -37,6 +37,10 @@ hal::Nanos monotonic_now() {
 struct V4l2Capture::Impl {
     V4l2CaptureConfig config;
     int fd = -1;
+    // The multi-planar API (HDMI receivers such as RK3588's hdmirx offer only it) with
+    // one-buffer formats: the same frames, the plane's fields instead of the buffer's.
+    std::uint32_t buf_type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    bool mplane = false;
     std::array<Buffer, kMaxBuffers> buffers{};
     int count = 0;
     bool streaming = false;
@@ -59,6 +63,19 @@ struct V4l2Capture::Impl {
     int xioctl(unsigned long req, void* arg) {
         return system::retry_eintr([&] { return ::ioctl(fd, req, arg); });
     }
+    // A v4l2_buffer of our type and memory; `plane` receives the one plane (mplane).
+    v4l2_buffer buffer_of(v4l2_plane& plane, int index = 0) const {
+        v4l2_buffer b{};
+        b.type = buf_type;
+        b.memory = V4L2_MEMORY_MMAP;
+        b.index = static_cast<std::uint32_t>(index);
+        if (mplane) {
+            plane = v4l2_plane{};
+            b.m.planes = &plane;
+            b.length = 1;
+        }
+        return b;
+    }
 
     bool open_device() {
         fd = system::retry_eintr(
@@ -68,8 +85,11 @@ struct V4l2Capture::Impl {
         if (xioctl(VIDIOC_QUERYCAP, &cap) < 0) return fail("VIDIOC_QUERYCAP", errno);
         const std::uint32_t caps =
             cap.capabilities & V4L2_CAP_DEVICE_CAPS ? cap.device_caps : cap.capabilities;
-        if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) {
-            error = config.device + ": not a single-planar streaming capture device (driver " +
+        mplane = !(caps & V4L2_CAP_VIDEO_CAPTURE) && (caps & V4L2_CAP_VIDEO_CAPTURE_MPLANE);
+        buf_type = mplane ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        if (!(caps & (V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_VIDEO_CAPTURE_MPLANE)) ||
+            !(caps & V4L2_CAP_STREAMING)) {
+            error = config.device + ": not a streaming video capture device (driver " +
                     reinterpret_cast<const char*>(cap.driver) + "); check capture.device";
             return false;
         }
@@ -154,36 +174,55 @@ struct V4l2Capture::Impl {
             return false;
         }
         v4l2_format f{};
-        f.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        f.fmt.pix.width = static_cast<std::uint32_t>(config.width);
-        f.fmt.pix.height = static_cast<std::uint32_t>(config.height);
-        f.fmt.pix.pixelformat = fi.fourcc;
-        f.fmt.pix.field = V4L2_FIELD_NONE;
-        if (xioctl(VIDIOC_S_FMT, &f) < 0) return fail("VIDIOC_S_FMT", errno);
-        if (f.fmt.pix.pixelformat != fi.fourcc) {
+        f.type = buf_type;
+        std::uint32_t width = 0, height = 0, fourcc = 0, stride = 0;
+        if (mplane) {
+            f.fmt.pix_mp.width = static_cast<std::uint32_t>(config.width);
+            f.fmt.pix_mp.height = static_cast<std::uint32_t>(config.height);
+            f.fmt.pix_mp.pixelformat = fi.fourcc;
+            f.fmt.pix_mp.field = V4L2_FIELD_NONE;
+            f.fmt.pix_mp.num_planes = 1;
+            if (xioctl(VIDIOC_S_FMT, &f) < 0) return fail("VIDIOC_S_FMT", errno);
+            width = f.fmt.pix_mp.width, height = f.fmt.pix_mp.height;
+            fourcc = f.fmt.pix_mp.pixelformat, stride = f.fmt.pix_mp.plane_fmt[0].bytesperline;
+            if (fourcc == fi.fourcc && f.fmt.pix_mp.num_planes != 1) {
+                error = config.device + ": " + fourcc_name(fourcc) + " comes in " +
+                        std::to_string(f.fmt.pix_mp.num_planes) +
+                        " separate buffers here; the pipeline takes one-buffer frames";
+                return false;
+            }
+        } else {
+            f.fmt.pix.width = static_cast<std::uint32_t>(config.width);
+            f.fmt.pix.height = static_cast<std::uint32_t>(config.height);
+            f.fmt.pix.pixelformat = fi.fourcc;
+            f.fmt.pix.field = V4L2_FIELD_NONE;
+            if (xioctl(VIDIOC_S_FMT, &f) < 0) return fail("VIDIOC_S_FMT", errno);
+            width = f.fmt.pix.width, height = f.fmt.pix.height;
+            fourcc = f.fmt.pix.pixelformat, stride = f.fmt.pix.bytesperline;
+        }
+        if (fourcc != fi.fourcc) {
             error = config.device + ": does not offer " + fourcc_name(fi.fourcc) + " (it chose " +
-                    fourcc_name(f.fmt.pix.pixelformat) + "); see v4l2-ctl --list-formats-ext";
+                    fourcc_name(fourcc) + "); see v4l2-ctl --list-formats-ext";
             return false;
         }
-        if (static_cast<int>(f.fmt.pix.width) != config.width ||
-            static_cast<int>(f.fmt.pix.height) != config.height) {
+        if (static_cast<int>(width) != config.width || static_cast<int>(height) != config.height) {
             error = config.device + ": cannot capture " + std::to_string(config.width) + "x" +
-                    std::to_string(config.height) + " (it offers " +
-                    std::to_string(f.fmt.pix.width) + "x" + std::to_string(f.fmt.pix.height) + ")";
+                    std::to_string(config.height) + " (it offers " + std::to_string(width) + "x" +
+                    std::to_string(height) + ")";
             return false;
         }
-        fmt = {static_cast<int>(f.fmt.pix.width), static_cast<int>(f.fmt.pix.height),
-               static_cast<int>(f.fmt.pix.bytesperline), fi.pixel};
+        fmt = {static_cast<int>(width), static_cast<int>(height), static_cast<int>(stride),
+               fi.pixel};
         if (!dv && config.fps > 0) {
             v4l2_streamparm p{};
-            p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+            p.type = buf_type;
             p.parm.capture.timeperframe = {
                 1000, static_cast<std::uint32_t>(std::lround(config.fps * 1000))};
             if (xioctl(VIDIOC_S_PARM, &p) < 0 && errno != ENOTTY)
                 return fail("VIDIOC_S_PARM", errno);
         }
         v4l2_streamparm p{};
-        p.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        p.type = buf_type;
         if (!dv && xioctl(VIDIOC_G_PARM, &p) == 0 && p.parm.capture.timeperframe.denominator > 0)
             period = static_cast<hal::Nanos>(p.parm.capture.timeperframe.numerator) * hal::kSecond /
                      p.parm.capture.timeperframe.denominator;
@@ -193,7 +232,7 @@ struct V4l2Capture::Impl {
     bool map_buffers() {
         v4l2_requestbuffers req{};
         req.count = static_cast<std::uint32_t>(config.buffers);
-        req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        req.type = buf_type;
         req.memory = V4L2_MEMORY_MMAP;
         if (xioctl(VIDIOC_REQBUFS, &req) < 0) return fail("VIDIOC_REQBUFS", errno);
         if (req.count < 2) {
@@ -203,25 +242,24 @@ struct V4l2Capture::Impl {
         }
         count = static_cast<int>(std::min<std::uint32_t>(req.count, kMaxBuffers));
         for (int i = 0; i < count; ++i) {
-            v4l2_buffer b{};
-            b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-            b.memory = V4L2_MEMORY_MMAP;
-            b.index = static_cast<std::uint32_t>(i);
+            v4l2_plane plane{};
+            v4l2_buffer b = buffer_of(plane, i);
             if (xioctl(VIDIOC_QUERYBUF, &b) < 0) return fail("VIDIOC_QUERYBUF", errno);
             Buffer& buf = buffers[i];
-            buf.length = b.length;
-            buf.data =
-                ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, b.m.offset);
+            buf.length = mplane ? plane.length : b.length;
+            buf.data = ::mmap(nullptr, buf.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd,
+                              mplane ? plane.m.mem_offset : b.m.offset);
             if (buf.data == MAP_FAILED) return fail("mmap", errno);
             v4l2_exportbuffer e{};
-            e.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+            e.type = buf_type;
             e.index = static_cast<std::uint32_t>(i);
             e.flags = O_RDONLY | O_CLOEXEC;
             // A driver without DMABUF export still captures; the display then copies.
             buf.dmabuf = xioctl(VIDIOC_EXPBUF, &e) == 0 ? e.fd : -1;
+            b = buffer_of(plane, i);
             if (xioctl(VIDIOC_QBUF, &b) < 0) return fail("VIDIOC_QBUF", errno);
         }
-        int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        int type = static_cast<int>(buf_type);
         if (xioctl(VIDIOC_STREAMON, &type) < 0) return fail("VIDIOC_STREAMON", errno);
         streaming = true;
         have_seq = false;
@@ -231,7 +269,7 @@ struct V4l2Capture::Impl {
     // Stops streaming and frees the buffers. Call only with no frame borrowed.
     void teardown(bool close_fd) {
         if (fd >= 0 && streaming) {
-            int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+            int type = static_cast<int>(buf_type);
             xioctl(VIDIOC_STREAMOFF, &type);
         }
         streaming = false;
@@ -244,7 +282,7 @@ struct V4l2Capture::Impl {
         count = 0;
         if (fd >= 0) {
             v4l2_requestbuffers req{};
-            req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+            req.type = buf_type;
             req.memory = V4L2_MEMORY_MMAP;
             xioctl(VIDIOC_REQBUFS, &req);  // count 0 frees them in the driver
         }
@@ -277,10 +315,8 @@ struct V4l2Capture::Impl {
     }
 
     bool requeue(int index) {
-        v4l2_buffer b{};
-        b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        b.memory = V4L2_MEMORY_MMAP;
-        b.index = static_cast<std::uint32_t>(index);
+        v4l2_plane plane{};
+        v4l2_buffer b = buffer_of(plane, index);
         return xioctl(VIDIOC_QBUF, &b) == 0;
     }
 
@@ -414,9 +450,8 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         v4l2_buffer newest{};
         bool have = false;
         for (;;) {
-            v4l2_buffer b{};
-            b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-            b.memory = V4L2_MEMORY_MMAP;
+            v4l2_plane plane{};
+            v4l2_buffer b = m.buffer_of(plane);
             if (m.xioctl(VIDIOC_DQBUF, &b) < 0) {
                 if (errno == EAGAIN) break;
                 if (errno == ENODEV) {

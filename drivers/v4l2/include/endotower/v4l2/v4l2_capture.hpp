@@ -1,5 +1,6 @@
-// V4l2Capture: a V4L2 video-capture device as a hal::FrameSource (single-planar
-// streaming I/O, MMAP buffers, each also exported as a DMABUF for the display).
+// V4l2Capture: a V4L2 video-capture device as a hal::FrameSource (streaming I/O,
+// single- or multi-planar API as the device offers, one-buffer formats; MMAP buffers,
+// each also exported as a DMABUF for the display).
 //
 // Parameters (board file `capture:`): device path, format (yuyv|uyvy|nv12; mjpeg is
 // refused, see capture_format.hpp), width/height (ignored when DV timings set them),
