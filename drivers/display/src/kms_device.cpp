@@ -245,4 +245,10 @@ bool KmsDevice::probe_connected() {
     return c && c->connection == DRM_MODE_CONNECTED && c->count_modes > 0;
 }
 
+bool KmsDevice::connected_now() {
+    Ptr<drmModeConnector> c(drmModeGetConnectorCurrent(fd, connector_id));
+    // A failed read is not an unplug: the commit path finds real trouble.
+    return !c || c->connection != DRM_MODE_DISCONNECTED;
+}
+
 }  // namespace endotower::display

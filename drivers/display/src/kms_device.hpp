@@ -41,6 +41,9 @@ struct KmsDevice {
     void close();
     // Re-reads the connector (a probe): true when a monitor is attached.
     bool probe_connected();
+    // The connector's last known status, without probing (the kernel updates it on a
+    // hotplug interrupt or its own polling): cheap enough to ask every second.
+    bool connected_now();
 };
 
 std::string connector_name(const drmModeConnector& c);

@@ -169,6 +169,9 @@ struct KmsSink::Impl {
     std::uint32_t mode_blob = 0;
     bool modeset = true, connected = true;
     hal::Nanos next_probe = 0;
+    // While connected, the connector's status is read once a second: some drivers (vkms,
+    // many HDMI encoders) keep flipping into an unplugged connector.
+    hal::Nanos next_status_check = 0;
     bool flip_done = false;
     hal::Nanos flip_ns = 0;
 
@@ -549,14 +552,23 @@ hal::Nanos KmsSink::present(const hal::Frame& video, const hal::OverlayLayer* la
     ++m.stats.frames;
     if (!m.connected) {
         const hal::Nanos now = mono_now();
-        if (now < m.next_probe || !m.dev.probe_connected()) {
-            m.next_probe = std::max(m.next_probe, now + hal::kSecond);
+        // Probe once a second, not at every frame (a probe can take milliseconds).
+        const bool due = now >= m.next_probe;
+        if (due) m.next_probe = now + hal::kSecond;
+        if (!due || !m.dev.probe_connected()) {
             ++m.stats.dropped_frames;
             return m.clock.now();
         }
         m.connected = true;
         ++m.stats.reconnects;
         log_line("connector " + m.dev.connector_name + " is back; setting the mode again");
+    } else if (const hal::Nanos now = mono_now(); now >= m.next_status_check) {
+        m.next_status_check = now + hal::kSecond;
+        if (!m.dev.connected_now()) {
+            m.lost_monitor("unplugged");
+            ++m.stats.dropped_frames;
+            return m.clock.now();
+        }
     }
 
     // Video: the capture buffer itself when the driver takes it, else one copy.

@@ -13,7 +13,8 @@
 // Commits: atomic with a page-flip event (legacy SetCrtc/PageFlip/SetPlane when the
 // driver has no atomic API); present() waits for that event and returns its kernel
 // timestamp (CLOCK_MONOTONIC). No out-fences are required.
-// Hot-unplug: a failed commit or a missing flip event re-reads the connector; while
+// Hot-unplug: the connector's status, read once a second, or a failed commit or a
+// missing flip event (then re-probed) notices the monitor has gone; while
 // it is disconnected frames are dropped (present() returns the time of the drop),
 // it is probed once a second and the mode is set again when it comes back.
 // Writeback (for tests, vkms): with `writeback`, request_readback() makes the next
