@@ -14,7 +14,8 @@ void CalibrationStage::configure(const hal::FrameFormat& format) {
     const double sx = static_cast<double>(format.width) / cal_.width;
     const double sy = static_cast<double>(format.height) / cal_.height;
     if (std::abs(sx - sy) > 0.01 * sx) return;  // another aspect ratio: no like-for-like circle
-    monitor_.emplace(FovCircle{cal_.fov.cx * sx, cal_.fov.cy * sy, cal_.fov.radius * sx});
+    scaled_ = FovCircle{cal_.fov.cx * sx, cal_.fov.cy * sy, cal_.fov.radius * sx};
+    monitor_.emplace(scaled_);
 }
 
 void CalibrationStage::process(app::AnalysisContext& ctx) {
@@ -27,6 +28,14 @@ void CalibrationStage::process(app::AnalysisContext& ctx) {
         .field("fov", to_string(check.status));
     if (check.status != FovStatus::kUnknown)
         ctx.trace.field("fov_shift_px", std::round(check.shift_px * 100) / 100);
+    if (mask_ && monitor_) {
+        // A measured circle of another radius is another scope: keep to the calibrated one.
+        const bool measured = check.status == FovStatus::kOk || check.status == FovStatus::kShifted;
+        FovCircle c = measured ? check.circle : scaled_;
+        c.radius += 1.0;  // the rim's own pixels stay
+        mask_outside(ctx.frame, c);
+        ctx.trace.field("fov_mask", measured ? "measured" : "calibrated");
+    }
     ctx.trace.end_object();
 }
 

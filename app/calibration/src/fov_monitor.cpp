@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace endotower::calibration {
 
@@ -139,6 +140,72 @@ FovCheck FovMonitor::check(const hal::Frame& frame) {
     else
         out.status = FovStatus::kOk;
     return out;
+}
+
+namespace {
+
+// Fills pixels [x0, x1) of one row with black in the frame's format.
+void fill_black(std::uint8_t* row, hal::PixelFormat f, int x0, int x1) {
+    if (x1 <= x0) return;
+    switch (f) {
+        case hal::PixelFormat::kYuyv:
+        case hal::PixelFormat::kUyvy: {
+            const bool yuyv = f == hal::PixelFormat::kYuyv;
+            x0 += x0 & 1;  // whole pairs only
+            x1 -= x1 & 1;
+            for (int x = x0; x < x1; ++x) {
+                row[2 * x + (yuyv ? 0 : 1)] = 16;
+                row[2 * x + (yuyv ? 1 : 0)] = 128;
+            }
+            return;
+        }
+        case hal::PixelFormat::kNv12:
+            std::memset(row + x0, 16, static_cast<std::size_t>(x1 - x0));
+            return;
+        default: {
+            const int bpp = hal::bytes_per_pixel(f);
+            std::memset(row + static_cast<std::ptrdiff_t>(bpp) * x0, 0,
+                        static_cast<std::size_t>(bpp) * (x1 - x0));
+        }
+    }
+}
+
+// The pixels of row y (centres at y + 0.5) inside the circle: [x0, x1).
+void inside_span(const FovCircle& c, double y, int width, int& x0, int& x1) {
+    const double dy = y - c.cy;
+    if (std::abs(dy) >= c.radius) {
+        x0 = x1 = width;
+        return;
+    }
+    const double half = std::sqrt(c.radius * c.radius - dy * dy);
+    x0 = std::clamp(static_cast<int>(std::ceil(c.cx - half - 0.5)), 0, width);
+    x1 = std::clamp(static_cast<int>(std::floor(c.cx + half - 0.5)) + 1, x0, width);
+}
+
+}  // namespace
+
+void mask_outside(const hal::Frame& frame, const FovCircle& circle) {
+    const hal::FrameFormat& f = frame.format;
+    if (frame.data == nullptr || !circle.valid()) return;
+    for (int y = 0; y < f.height; ++y) {
+        int x0 = 0, x1 = 0;
+        inside_span(circle, y + 0.5, f.width, x0, x1);
+        std::uint8_t* row = frame.data + static_cast<std::ptrdiff_t>(y) * f.stride;
+        fill_black(row, f.pixel_format, 0, x0);
+        fill_black(row, f.pixel_format, x1, f.width);
+    }
+    if (f.pixel_format != hal::PixelFormat::kNv12) return;
+    // The interleaved chroma plane: one row per two luma rows, one pair per two pixels.
+    std::uint8_t* uv = frame.data + static_cast<std::ptrdiff_t>(f.height) * f.stride;
+    for (int y = 0; y < f.height / 2; ++y) {
+        int x0 = 0, x1 = 0;
+        inside_span(circle, 2 * y + 1.0, f.width, x0, x1);
+        std::uint8_t* row = uv + static_cast<std::ptrdiff_t>(y) * f.stride;
+        const int p0 = (x0 + 1) / 2, p1 = x1 / 2;
+        std::memset(row, 128, static_cast<std::size_t>(2 * p0));
+        if (p1 < f.width / 2)
+            std::memset(row + 2 * p1, 128, static_cast<std::size_t>(2 * (f.width / 2 - p1)));
+    }
 }
 
 }  // namespace endotower::calibration

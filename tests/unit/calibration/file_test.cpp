@@ -6,7 +6,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calib_test_util.hpp"
+#include "endotower/app/json_line.hpp"
+#include "endotower/app/overlay_canvas.hpp"
 #include "endotower/calibration/calibration_file.hpp"
+#include "endotower/calibration/calibration_stage.hpp"
 #include "endotower/calibration/fov_monitor.hpp"
 #include "endotower/calibration/square_grid.hpp"
 #include "endotower/calibration/undistorter.hpp"
@@ -220,14 +223,16 @@ TEST(Undistorter, TwoThreadsGiveTheSameBytes) {
     ASSERT_TRUE(two.set_threads(2));
     EXPECT_EQ(two.threads(), 2);
     const int stride = c.width * 3;
-    std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height), a(in.size(), 1), b(in.size(), 2);
+    std::vector<std::uint8_t> in(static_cast<std::size_t>(stride) * c.height), a(in.size(), 1),
+        b(in.size(), 2);
     hal::Frame fi, fa, fb;
     fi.format = fa.format = fb.format = {c.width, c.height, stride, hal::PixelFormat::kBgr24};
     fi.data = in.data();
     fa.data = a.data();
     fb.data = b.data();
     for (int frame = 0; frame < 6; ++frame) {
-        for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<std::uint8_t>((i * 7 + frame * 31) ^ (i >> 9));
+        for (std::size_t i = 0; i < in.size(); ++i)
+            in[i] = static_cast<std::uint8_t>((i * 7 + frame * 31) ^ (i >> 9));
         if (frame == 3) {
             ASSERT_TRUE(two.init(c, error)) << error;  // keeps its thread
         }
@@ -303,6 +308,137 @@ target: {kind: white, distances_mm: 40}
     hal::Frame bf = f;
     bf.data = black.data();
     EXPECT_EQ(monitor.check(bf).status, FovStatus::kUnknown);
+}
+
+// mask_outside: every pixel whose centre is outside the circle is black in the frame's
+// own format, every pixel inside is untouched (BGR, grey, YUYV in whole pairs, NV12
+// with its chroma plane).
+TEST(FovMask, BlackensExactlyTheOutside) {
+    const FovCircle c{61.3, 40.7, 33.2};
+    const int w = 128, h = 90;
+    auto inside = [&](int x, int y) {
+        return std::hypot(x + 0.5 - c.cx, y + 0.5 - c.cy) < c.radius;
+    };
+    for (const hal::PixelFormat pf :
+         {hal::PixelFormat::kBgr24, hal::PixelFormat::kGray8, hal::PixelFormat::kBgra32}) {
+        const int bpp = hal::bytes_per_pixel(pf), stride = w * bpp + 16;
+        std::vector<std::uint8_t> px(static_cast<std::size_t>(stride) * h, 200);
+        hal::Frame f;
+        f.format = {w, h, stride, pf};
+        f.data = px.data();
+        mask_outside(f, c);
+        int in = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int b = 0; b < bpp; ++b) {
+                    ASSERT_EQ(px[y * stride + x * bpp + b], inside(x, y) ? 200 : 0)
+                        << x << "," << y;
+                    in += inside(x, y) && b == 0;
+                }
+        EXPECT_NEAR(in, M_PI * c.radius * c.radius, 0.03 * M_PI * c.radius * c.radius);
+        for (int y = 0; y < h; ++y)
+            EXPECT_EQ(px[y * stride + w * bpp], 200) << "row padding untouched";
+    }
+    {
+        std::vector<std::uint8_t> px(static_cast<std::size_t>(w) * 2 * h, 200);
+        hal::Frame f;
+        f.format = {w, h, w * 2, hal::PixelFormat::kYuyv};
+        f.data = px.data();
+        mask_outside(f, c);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; x += 2) {
+                const bool keep = inside(x, y) || inside(x + 1, y);
+                const std::uint8_t* p = &px[y * w * 2 + x * 2];
+                if (keep) {
+                    EXPECT_EQ(p[0], 200);
+                } else {
+                    EXPECT_EQ(p[0], 16) << x << "," << y;
+                    EXPECT_EQ(p[1], 128);
+                    EXPECT_EQ(p[2], 16);
+                    EXPECT_EQ(p[3], 128);
+                }
+            }
+    }
+    {
+        std::vector<std::uint8_t> px(static_cast<std::size_t>(w) * h * 3 / 2, 200);
+        hal::Frame f;
+        f.format = {w, h, w, hal::PixelFormat::kNv12};
+        f.data = px.data();
+        mask_outside(f, c);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) ASSERT_EQ(px[y * w + x], inside(x, y) ? 200 : 16);
+        const std::uint8_t* uv = px.data() + w * h;
+        EXPECT_EQ(uv[0], 128);                                      // a corner
+        EXPECT_EQ(uv[(20 / 2) * w + 2 * (60 / 2)], 200);            // near the centre
+        EXPECT_EQ(uv[(h / 2 - 1) * w + 2 * (w / 2 - 1) + 1], 128);  // the far corner's V
+    }
+    std::vector<std::uint8_t> px(16, 7);
+    hal::Frame f;
+    f.format = {4, 4, 4, hal::PixelFormat::kGray8};
+    f.data = px.data();
+    mask_outside(f, FovCircle{});  // no circle: nothing happens
+    EXPECT_EQ(px, std::vector<std::uint8_t>(16, 7));
+}
+
+// The stage masks the analysis frame for the stages after it: on a white-background
+// frame the measured circle is used and the outside is black; on a black frame
+// (no rim to measure) the calibrated circle; without set_mask nothing changes.
+TEST(CalibrationStage, MasksOutsideTheFieldOfView) {
+    scene::Scenario sc = scenario_or_fail("frames: 1\nlight: 0.7\ntarget: {kind: white, distances_mm: 40}\n");
+    scene::SceneRenderer r;
+    std::string error;
+    ASSERT_TRUE(r.init(sc, 7, error)) << error;
+    scene::Image img;
+    scene::FrameTruth truth;
+    r.render(0, img, truth);
+    hal::Frame f;
+    f.format = {img.width, img.height, img.width * 3, hal::PixelFormat::kBgr24};
+    f.data = img.bgr.data();
+    GrayImage g;
+    ASSERT_TRUE(gray_from_frame(f, g));
+    Calibration c = sample();
+    c.width = img.width, c.height = img.height;
+    ASSERT_TRUE(detect_fov_circle(g, c.fov, error)) << error;
+    app::OverlayCanvas canvas;
+    app::JsonLine line;
+    auto run = [&](CalibrationStage& stage, hal::Frame& frame) {
+        line.clear();
+        line.begin_object();
+        app::AnalysisContext ctx{frame, {}, canvas, line, 0};
+        stage.process(ctx);
+        line.end_object();
+        return std::string(line.view());
+    };
+    CalibrationStage plain(c, "scope.json", "abc");
+    plain.configure(f.format);
+    const std::vector<std::uint8_t> before = img.bgr;
+    const std::string t0 = run(plain, f);
+    EXPECT_EQ(img.bgr, before);
+    EXPECT_EQ(t0.find("fov_mask"), std::string::npos) << t0;
+    CalibrationStage masking(c, "scope.json", "abc");
+    masking.set_mask(true);
+    masking.configure(f.format);
+    const std::string t1 = run(masking, f);
+    EXPECT_NE(t1.find("\"fov\":\"ok\""), std::string::npos) << t1;
+    EXPECT_NE(t1.find("\"fov_mask\":\"measured\""), std::string::npos) << t1;
+    int outside = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const std::size_t i = (static_cast<std::size_t>(y) * img.width + x) * 3;
+            const double d = std::hypot(x + 0.5 - c.fov.cx, y + 0.5 - c.fov.cy);
+            if (d > c.fov.radius + 3) {
+                ASSERT_EQ(img.bgr[i] | img.bgr[i + 1] | img.bgr[i + 2], 0) << x << "," << y;
+                ++outside;
+            } else if (d < c.fov.radius - 3) {
+                ASSERT_EQ(img.bgr[i], before[i]) << x << "," << y;
+            }
+        }
+    EXPECT_GT(outside, 1000);
+    std::vector<std::uint8_t> black(img.bgr.size(), 0);
+    hal::Frame bf = f;
+    bf.data = black.data();
+    const std::string t2 = run(masking, bf);
+    EXPECT_NE(t2.find("\"fov\":\"unknown\",\"fov_mask\":\"calibrated\""), std::string::npos) << t2;
 }
 
 // On the real endoscopic frame (tissue up to the rim): the check agrees with the

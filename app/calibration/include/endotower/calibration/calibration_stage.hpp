@@ -5,6 +5,10 @@
 //                   "unknown", "fov_shift_px"}
 // Frames of another size than the calibration's: the circle is scaled when the aspect
 // ratio matches, else the check reads "unknown". Allocates nothing per frame.
+// With mask_outside_fov (set_mask), every pixel of the analysis frame outside the field
+// of view is blackened after the check (mask_outside), so the stages after this one
+// detect nothing there: the measured circle when the check found one, else the
+// calibrated one; the trace member then also has "fov_mask": "measured"|"calibrated".
 #pragma once
 
 #include <optional>
@@ -24,11 +28,14 @@ public:
     std::string_view name() const override { return "calibration"; }
     void configure(const hal::FrameFormat& format) override;
     void process(app::AnalysisContext& ctx) override;
+    void set_mask(bool mask_outside_fov) { mask_ = mask_outside_fov; }
 
 private:
     Calibration cal_;
     std::string file_, hash_;
     std::optional<FovMonitor> monitor_;
+    FovCircle scaled_;  // the calibrated circle in this format's pixels
+    bool mask_ = false;
 };
 
 }  // namespace endotower::calibration

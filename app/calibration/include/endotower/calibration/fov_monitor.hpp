@@ -31,6 +31,12 @@ struct FovCheck {
     double shift_px = 0;
 };
 
+// Blackens every pixel of `frame` whose centre lies outside `circle` (a frame the
+// caller owns, e.g. the analysis copy), so that nothing is detected there. Packed RGB
+// and grey: 0; YUYV/UYVY: Y 16, U V 128, in whole pixel pairs (a pair half inside
+// stays); NV12: the same per plane. Allocates nothing.
+void mask_outside(const hal::Frame& frame, const FovCircle& circle);
+
 class FovMonitor {
 public:
     // `reference` from the calibration, in the pixels of the frames checked.
