@@ -35,6 +35,12 @@ constexpr double kMinAgreeing = 0.4;
 constexpr double kMaxAreaRatio = 25.0;
 // Below this fraction of its bounding box in the picture a region counts as gone.
 constexpr double kMinVisible = 0.2;
+// Tissue bends: followed points off the region's homography by up to this fraction of
+// the region's size (sqrt of its area) are kept as its local motion, not as outliers.
+constexpr double kBendFraction = 0.15;
+// The local motion at a vertex: points weighted by a Gaussian of this fraction of the
+// region's size around the vertex (keyframe positions).
+constexpr double kBendSigma = 0.2;
 
 bool supported(const hal::Frame& f) {
     using hal::PixelFormat;
@@ -129,7 +135,9 @@ struct RegionTracker::Impl {
         RegionState state = RegionState::kTracked;
         cv::Matx33d homography = cv::Matx33d::eye();  // keyframe -> current frame
         std::vector<cv::Point2f> polygon;             // current, or last known while lost
+        std::vector<cv::Point2f> rigid;               // the keyframe polygon through `homography`
         std::vector<cv::Point2f> kf_pts, cur_pts;     // features followed frame to frame
+        std::vector<int> track_index;                 // each one's entry in kf_track
         int inliers = 0;
         int since_match = 0;
         bool force_match = true;  // the next frame is matched against the keyframe
@@ -148,7 +156,8 @@ struct RegionTracker::Impl {
     void build_pyramid(const hal::Frame& f, cv::Rect roi, std::vector<cv::Mat>& pyr);
     const cv::Mat& full_gray();
     bool match(Region& r, const cv::Mat& gray, bool whole, const std::vector<cv::Point2f>& around);
-    void reseed(Region& r, cv::Size frame);
+    void reseed(Region& r, cv::Size frame, bool keep_followed);
+    void bend(Region& r);
 
     RegionTrackerParams p;
     detail::FeatureDetector keyframe_detector, frame_detector;
@@ -165,7 +174,9 @@ struct RegionTracker::Impl {
     bool whole_frame_ready = false;
     detail::KeyframeMatch matched;
     std::vector<cv::Point2f> lk_prev, lk_next, kept_kf, kept_cur, candidate;
-    std::vector<std::uint8_t> lk_status, inlier_mask;
+    std::vector<int> kept_index;
+    std::vector<cv::Point2f> offsets;
+    std::vector<std::uint8_t> lk_status, inlier_mask, followed;
     std::vector<float> lk_error;
 };
 
@@ -227,34 +238,113 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.03));
     kept_kf.clear();
     kept_cur.clear();
+    kept_index.clear();
     for (std::size_t i = 0; i < lk_next.size(); ++i) {
         const cv::Point2f q = lk_next[i] / s + origin;
         if (!lk_status[i] || q.x < 0 || q.y < 0 || q.x > frame.width - 1 || q.y > frame.height - 1)
             continue;
         kept_kf.push_back(r.kf_pts[i]);
         kept_cur.push_back(q);
+        kept_index.push_back(r.track_index[i]);
     }
     if (kept_kf.size() < static_cast<std::size_t>(std::max(4, p.min_inliers))) return false;
     const cv::Mat h =
         cv::findHomography(kept_kf, kept_cur, cv::RANSAC, p.ransac_px / s, inlier_mask, 500, 0.995);
     if (h.empty()) return false;
+    // The homography's inliers are followed. So is a point off it by up to a bend's
+    // amount whose offset matches its neighbours' (a smooth bend moves a patch of
+    // tissue together); a point alone in its offset is LK losing its texture: dropped.
+    const cv::Matx33d hm(h);
+    const double size = std::sqrt(std::abs(r.kf_area));
+    const double bend_px = kBendFraction * size,
+                 inv2s2 = 1.0 / (2 * kBendSigma * size * kBendSigma * size);
+    const double tol = p.ransac_px / s;
+    offsets.resize(kept_kf.size());
+    for (std::size_t i = 0; i < kept_kf.size(); ++i) {
+        const cv::Point2f& v = kept_kf[i];
+        const double w = hm(2, 0) * v.x + hm(2, 1) * v.y + hm(2, 2);
+        offsets[i] =
+            kept_cur[i] -
+            cv::Point2f(static_cast<float>((hm(0, 0) * v.x + hm(0, 1) * v.y + hm(0, 2)) / w),
+                        static_cast<float>((hm(1, 0) * v.x + hm(1, 1) * v.y + hm(1, 2)) / w));
+    }
     r.kf_pts.clear();
     r.cur_pts.clear();
-    for (std::size_t i = 0; i < inlier_mask.size(); ++i) {
-        if (!inlier_mask[i]) continue;
+    r.track_index.clear();
+    r.inliers = 0;
+    for (std::size_t i = 0; i < kept_kf.size(); ++i) {
+        bool keep = inlier_mask[i] != 0;
+        if (!keep && p.bend && std::hypot(offsets[i].x, offsets[i].y) <= bend_px) {
+            double sw = 0, mx = 0, my = 0;
+            for (std::size_t j = 0; j < kept_kf.size(); ++j) {
+                if (j == i || std::hypot(offsets[j].x, offsets[j].y) > bend_px) continue;
+                const cv::Point2f d = kept_kf[j] - kept_kf[i];
+                const double wt = std::exp(-(d.x * d.x + d.y * d.y) * inv2s2);
+                sw += wt, mx += wt * offsets[j].x, my += wt * offsets[j].y;
+            }
+            keep = sw >= 1.0 && std::hypot(offsets[i].x - mx / sw, offsets[i].y - my / sw) <= tol;
+        }
+        if (!keep) continue;
+        r.inliers += inlier_mask[i] ? 1 : 0;
         r.kf_pts.push_back(kept_kf[i]);
         r.cur_pts.push_back(kept_cur[i]);
+        r.track_index.push_back(kept_index[i]);
     }
-    r.inliers = static_cast<int>(r.kf_pts.size());
-    // Most followed points must agree: a motion too large for LK scatters them, and a
-    // homography fitted to the few that happen to agree would be wrong.
+    // Most followed points must agree (with the homography, or with it and a smooth
+    // bend): a motion too large for LK scatters them, and a homography fitted to the few
+    // that happen to agree would be wrong.
     if (r.inliers < p.min_inliers ||
-        r.inliers < kMinAgreeing * static_cast<double>(lk_next.size()) ||
+        static_cast<double>(r.kf_pts.size()) < kMinAgreeing * static_cast<double>(lk_next.size()) ||
         !plausible(r, cv::Matx33d(h), frame, candidate))
         return false;
     r.homography = cv::Matx33d(h);
+    r.rigid = candidate;
     r.polygon = candidate;
+    if (p.bend) bend(r);
     return true;
+}
+
+// Each vertex moved by the tissue's local motion: the followed points' offsets from the
+// homography, fitted around the vertex by Gaussian-weighted least squares to a plane
+// (offset + gradient, so a vertex beyond the points is extrapolated, not averaged) and
+// evaluated at the vertex. Rigid motion leaves offsets of noise size: the outline stays
+// the homography's. A pseudo-point of zero offset at the vertex damps the fit where few
+// points are near.
+void RegionTracker::Impl::bend(Region& r) {
+    const double size = std::sqrt(std::abs(r.kf_area));
+    const double inv2s2 = 1.0 / (2 * (kBendSigma * size) * (kBendSigma * size));
+    const cv::Matx33d& h = r.homography;
+    for (std::size_t k = 0; k < r.kf_polygon.size(); ++k) {
+        const cv::Point2f v = r.kf_polygon[k];
+        // Normal equations of [1, dx, dy] for the x and y offsets.
+        cv::Matx33d a = cv::Matx33d::zeros();
+        cv::Vec3d bx(0, 0, 0), by(0, 0, 0);
+        const double prior = 0.5;
+        a(0, 0) = prior;
+        double total = 0;
+        for (std::size_t i = 0; i < r.kf_pts.size(); ++i) {
+            const cv::Point2f& p = r.kf_pts[i];
+            const double ux = (p.x - v.x) / size, uy = (p.y - v.y) / size;
+            const double wt =
+                std::exp(-((p.x - v.x) * (p.x - v.x) + (p.y - v.y) * (p.y - v.y)) * inv2s2);
+            if (wt < 1e-4) continue;
+            const double w = h(2, 0) * p.x + h(2, 1) * p.y + h(2, 2);
+            const double ox = r.cur_pts[i].x - (h(0, 0) * p.x + h(0, 1) * p.y + h(0, 2)) / w;
+            const double oy = r.cur_pts[i].y - (h(1, 0) * p.x + h(1, 1) * p.y + h(1, 2)) / w;
+            const cv::Vec3d f(1, ux, uy);
+            a += wt * (f * f.t());
+            bx += wt * ox * f;
+            by += wt * oy * f;
+            total += wt;
+        }
+        if (total < 3) continue;  // too few points near this vertex to say
+        cv::Vec3d cx, cy;
+        if (!cv::solve(a, bx, cx, cv::DECOMP_CHOLESKY) ||
+            !cv::solve(a, by, cy, cv::DECOMP_CHOLESKY))
+            continue;
+        r.polygon[k] =
+            r.rigid[k] + cv::Point2f(static_cast<float>(cx[0]), static_cast<float>(cy[0]));
+    }
 }
 
 // Keyframe matching in a window around `around` (1.5x its size), or the whole frame.
@@ -276,20 +366,30 @@ bool RegionTracker::Impl::match(Region& r, const cv::Mat& g, bool whole,
            plausible(r, matched.homography, g.size(), candidate);
 }
 
-void RegionTracker::Impl::reseed(Region& r, cv::Size frame) {
-    // All the keyframe's points through the region's homography: points that left the
-    // picture and came back are followed again, and the frame-to-frame drift of single
-    // points is dropped.
-    r.kf_pts.clear();
-    r.cur_pts.clear();
+void RegionTracker::Impl::reseed(Region& r, cv::Size frame, bool keep_followed) {
+    // The keyframe's points through the region's homography: points that left the
+    // picture and came back are followed again. Without keep_followed every point is
+    // put back (the frame-to-frame drift of single points is dropped); with it, points
+    // still followed keep their positions (and the tissue's bend), the lost ones return.
     const cv::Matx33d& h = r.homography;
-    for (const cv::Point2f& v : r.kf_track) {
+    followed.assign(r.kf_track.size(), 0);
+    if (keep_followed) {
+        for (const int j : r.track_index) followed[static_cast<std::size_t>(j)] = 1;
+    } else {
+        r.kf_pts.clear();
+        r.cur_pts.clear();
+        r.track_index.clear();
+    }
+    for (std::size_t j = 0; j < r.kf_track.size(); ++j) {
+        if (followed[j]) continue;
+        const cv::Point2f& v = r.kf_track[j];
         const double w = h(2, 0) * v.x + h(2, 1) * v.y + h(2, 2);
         const double x = (h(0, 0) * v.x + h(0, 1) * v.y + h(0, 2)) / w,
                      y = (h(1, 0) * v.x + h(1, 1) * v.y + h(1, 2)) / w;
         if (!(x >= 0 && y >= 0 && x <= frame.width - 1 && y <= frame.height - 1)) continue;
         r.kf_pts.push_back(v);
         r.cur_pts.emplace_back(static_cast<float>(x), static_cast<float>(y));
+        r.track_index.push_back(static_cast<int>(j));
     }
 }
 
@@ -361,6 +461,7 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
         return false;
     }
     r.polygon = r.kf_polygon;
+    r.rigid = r.kf_polygon;
     // LK follows Shi-Tomasi corners spread over the region: more points than a small
     // region has descriptors, and points LK locates well. Their number bounds its cost.
     cv::goodFeaturesToTrack(g(roi), r.kf_track, kTrackCorners, 0.005,
@@ -371,6 +472,8 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
         for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_track.push_back(k.pt);
     r.kf_pts = r.kf_track;
     r.cur_pts = r.kf_pts;
+    r.track_index.resize(r.kf_track.size());
+    for (std::size_t j = 0; j < r.kf_track.size(); ++j) r.track_index[j] = static_cast<int>(j);
     r.inliers = static_cast<int>(r.kf_pts.size());
     r.mark_sequence = frame.sequence;
     r.mark_capture_ns = frame.capture_ns;
@@ -414,7 +517,7 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
             if (can_propagate && was_tracked && r.cur_pts.size() >= 4) found = m.propagate(r, size);
             // Points lost to LK are put back through the fitted homography before too
             // few are left (those that re-entered the picture too).
-            if (found && 2 * r.cur_pts.size() < r.kf_track.size()) m.reseed(r, size);
+            if (found && 2 * r.cur_pts.size() < r.kf_track.size()) m.reseed(r, size, true);
             ++r.since_match;
             const bool due = m.p.redetect_interval > 0 && r.since_match >= m.p.redetect_interval;
             if (!m.p.propagate || r.force_match || !found || due || resized) {
@@ -426,16 +529,24 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
                 if (ok) {
                     r.since_match = 0;
                     // Propagation that agrees with the keyframe is kept (many more points,
-                    // sub-pixel); one that has drifted further is replaced.
-                    const double tolerance = kAgreePx * m.frame_detector.pixel_size(size.width);
-                    if (!found || r.force_match ||
-                        mean_distance(m.candidate, r.polygon) > tolerance) {
+                    // sub-pixel, and the tissue's bend); one that has drifted further is
+                    // replaced. Two rigid fits to bending tissue differ by up to the bend
+                    // itself, which is not drift.
+                    const double tolerance = kAgreePx * m.frame_detector.pixel_size(size.width) +
+                                             mean_distance(r.polygon, r.rigid);
+                    // A match at the bare minimum of inliers is as likely wrong as the
+                    // drift it would correct: only a clear one overrides a propagation.
+                    const bool replace = !found || r.force_match ||
+                                         (mean_distance(m.candidate, r.rigid) > tolerance &&
+                                          m.matched.inliers >= 2 * m.p.min_inliers);
+                    if (replace) {
                         r.homography = m.matched.homography;
                         r.polygon = m.candidate;
+                        r.rigid = m.candidate;
                         r.inliers = m.matched.inliers;
                         keyframe = true;
                     }
-                    m.reseed(r, size);
+                    m.reseed(r, size, !replace);
                     r.force_match = false;
                 }
                 found = found || ok;
@@ -448,6 +559,7 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
             r.inliers = 0;
             r.cur_pts.clear();
             r.kf_pts.clear();
+            r.track_index.clear();
         }
         if (n >= out.size()) continue;
         RegionEstimate& e = out[n++];

@@ -16,6 +16,11 @@
 //                change (image pairs of different sizes), and on every frame while the
 //                region is lost (whole frame, recovery). Frames wider than
 //                detect_max_width are downscaled for it; results are in the input's pixels.
+// bend: tissue is not a plane. Propagated points off the homography by up to 15 % of the
+//   region's size are kept as its local motion, and each vertex is moved by the offsets
+//   of the points around it (a Gaussian-weighted local linear fit at the vertex, sigma
+//   20 % of the region's size): the outline follows a push or a fold; under rigid motion
+//   the offsets are noise and the outline stays the homography's.
 // A region is lost when fewer than min_inliers features agree or the homography is
 // implausible (flipped, collapsed, or the polygon out of the picture). OpenCV's
 // detectors, LK and RANSAC allocate internally; the tracker's own buffers are reused.
@@ -46,6 +51,7 @@ struct RegionTrackerParams {
     double ransac_px = 3.0;      // RANSAC reprojection threshold, input pixels
     int detect_max_width = 640;  // keyframe matching on frames downscaled to this width
     bool propagate = true;       // false: keyframe matching on every frame (the book's method)
+    bool bend = true;            // the outline follows tissue that bends (see track())
 };
 
 enum class RegionState { kTracked, kLost };
