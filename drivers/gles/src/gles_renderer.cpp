@@ -4,6 +4,7 @@
 #include <EGL/eglext.h>
 #include <GLES2/gl2.h>
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -38,40 +39,43 @@ void main() {
 )";
 
 // Coverage from a signed distance d (pixels, < 0 inside): clamp(0.5 - d) is exact
-// for edges on pixel boundaries and a one-pixel ramp otherwise.
-// kind 0: rounded rect (half size, corner, border); 1: annular sector (r_in, r_out,
-// mid angle, half span; border in shape2.x); 2: segment from the origin to shape.xy,
-// half width shape.z.
-constexpr const char* kShapeFs = ENDOTOWER_HIGHP R"(
-varying vec2 v_local;
-varying vec4 v_shape, v_shape2, v_fill, v_border;
+// for edges on pixel boundaries and a one-pixel ramp otherwise. One program per shape
+// kind: llvmpipe runs both sides of a branch, so a shared shader would pay for all.
+#define ENDOTOWER_SHAPE_HEAD \
+    ENDOTOWER_HIGHP "varying vec2 v_local;\nvarying vec4 v_shape, v_shape2, v_fill, v_border;\n"
+#define ENDOTOWER_SHAPE_TAIL \
+    "    vec4 c = bw > 0.0 ? mix(v_border, v_fill, clamp(0.5 - d - bw, 0.0, 1.0)) : v_fill;\n" \
+    "    float a = c.a * clamp(0.5 - d, 0.0, 1.0);\n" \
+    "    gl_FragColor = vec4(c.rgb * a, a);\n}\n"
+
+// Rounded rect: half size, corner radius, border width.
+constexpr const char* kRoundedRectFs = ENDOTOWER_SHAPE_HEAD R"(
 void main() {
-    float d;
+    vec2 q = abs(v_local) - v_shape.xy + v_shape.z;
+    float d = length(max(q, 0.0)) + min(max(q.x, q.y), 0.0) - v_shape.z;
+    float bw = v_shape.w;
+)" ENDOTOWER_SHAPE_TAIL;
+
+// Annular sector: r_in, r_out, border, mode (0 full ring, 1 span <= 180 deg: inside
+// both half-planes, 2 wider: inside either); shape2 the half-planes' outward normals.
+constexpr const char* kSectorFs = ENDOTOWER_SHAPE_HEAD R"(
+void main() {
+    float r = length(v_local);
+    float d = max(v_shape.x - r, r - v_shape.y);
+    float d1 = dot(v_local, v_shape2.xy), d2 = dot(v_local, v_shape2.zw);
+    float da = v_shape.w > 1.5 ? min(d1, d2) : max(d1, d2);
+    d = v_shape.w > 0.5 ? max(d, da) : d;
+    float bw = v_shape.z;
+)" ENDOTOWER_SHAPE_TAIL;
+
+// Segment from the origin to shape.xy, half width shape.z (round caps).
+constexpr const char* kSegmentFs = ENDOTOWER_SHAPE_HEAD R"(
+void main() {
+    vec2 ab = v_shape.xy;
+    float h = clamp(dot(v_local, ab) / max(dot(ab, ab), 1e-6), 0.0, 1.0);
+    float d = length(v_local - ab * h) - v_shape.z;
     float bw = 0.0;
-    if (v_shape2.w < 0.5) {
-        vec2 q = abs(v_local) - v_shape.xy + v_shape.z;
-        d = length(max(q, 0.0)) + min(max(q.x, q.y), 0.0) - v_shape.z;
-        bw = v_shape.w;
-    } else if (v_shape2.w < 1.5) {
-        float r = length(v_local);
-        d = max(v_shape.x - r, r - v_shape.y);
-        if (v_shape.w < 3.1415) {
-            float a = atan(v_local.y, v_local.x);
-            float delta = mod(a - v_shape.z + 3.14159265, 6.28318531) - 3.14159265;
-            d = max(d, (abs(delta) - v_shape.w) * r);
-        }
-        bw = v_shape2.x;
-    } else {
-        vec2 ab = v_shape.xy;
-        float h = clamp(dot(v_local, ab) / max(dot(ab, ab), 1e-6), 0.0, 1.0);
-        d = length(v_local - ab * h) - v_shape.z;
-    }
-    vec4 c = v_fill;
-    if (bw > 0.0) c = mix(v_border, v_fill, clamp(-0.5 - d - bw + 1.0, 0.0, 1.0));
-    float a = c.a * clamp(0.5 - d, 0.0, 1.0);
-    gl_FragColor = vec4(c.rgb * a, a);
-}
-)";
+)" ENDOTOWER_SHAPE_TAIL;
 
 constexpr const char* kTexVs = R"(
 attribute vec2 a_pos;
@@ -137,6 +141,8 @@ constexpr const char* kShapeAttributes[] = {"a_pos",    "a_local",  "a_shape", "
 constexpr const char* kTexAttributes[] = {"a_pos", "a_uv", "a_colour", nullptr};
 constexpr const char* kBoxAttributes[] = {"a_pos", "a_normal", "a_colour", nullptr};
 
+long long area_of(const hal::Rect& r) { return static_cast<long long>(r.width) * r.height; }
+
 void attribute(unsigned slot, int size, std::size_t stride, std::size_t offset) {
     glEnableVertexAttribArray(slot);
     glVertexAttribPointer(slot, size, GL_FLOAT, GL_FALSE, static_cast<GLsizei>(stride),
@@ -172,8 +178,7 @@ private:
     }
     bool make_current();
     void release_gl();
-    void draw(std::size_t first, std::size_t count);
-
+    
     EGLDisplay display_;
     EGLContext context_;
     EGLSurface surface_;
@@ -183,13 +188,25 @@ private:
     int width_ = 0, height_ = 0;
     bool configured_ = false;
     unsigned fbo_ = 0, colour_ = 0, depth_ = 0, atlas_tex_ = 0;
-    unsigned shape_prog_ = 0, text_prog_ = 0, image_prog_ = 0, box_prog_ = 0;
+    unsigned rrect_prog_ = 0, sector_prog_ = 0, segment_prog_ = 0;
+    unsigned text_prog_ = 0, image_prog_ = 0, box_prog_ = 0;
     unsigned shape_vbo_ = 0, text_vbo_ = 0, image_vbo_ = 0, box_vbo_ = 0;
     int box_clip_uniform_ = -1;
     std::array<unsigned, kMaxImages> images_{};
     GlyphAtlas atlas_;
     SceneBatch batch_;
     std::vector<std::uint8_t> staging_;  // read-back of the drawn rects
+
+    // Last frame's rects: what they showed (hash) and where their read-back lies in
+    // staging_. A rect drawn again with the same hash is still in the framebuffer and
+    // in staging_, so it is neither drawn nor read again (a menu that stands still).
+    struct Cache {
+        std::array<hal::Rect, SceneBatch::kMaxRegions> rects{};
+        std::array<std::uint64_t, SceneBatch::kMaxRegions> hash{};
+        std::array<std::size_t, SceneBatch::kMaxRegions> offset{};
+        std::size_t count = 0;
+    } cache_;
+    void draw_dirty(const hal::OverlayScene& scene, const std::array<bool, SceneBatch::kMaxRegions>& redraw);
 };
 
 GlesRenderer::~GlesRenderer() {
@@ -208,7 +225,8 @@ bool GlesRenderer::make_current() {
 }
 
 void GlesRenderer::release_gl() {
-    const unsigned programs[] = {shape_prog_, text_prog_, image_prog_, box_prog_};
+    const unsigned programs[] = {rrect_prog_, sector_prog_, segment_prog_,
+                                 text_prog_,  image_prog_,  box_prog_};
     for (unsigned p : programs)
         if (p != 0) glDeleteProgram(p);
     const unsigned buffers[] = {shape_vbo_, text_vbo_, image_vbo_, box_vbo_};
@@ -218,7 +236,8 @@ void GlesRenderer::release_gl() {
     glDeleteTextures(kMaxImages, images_.data());
     glDeleteRenderbuffers(1, &depth_);
     glDeleteFramebuffers(1, &fbo_);
-    shape_prog_ = text_prog_ = image_prog_ = box_prog_ = 0;
+    rrect_prog_ = sector_prog_ = segment_prog_ = text_prog_ = image_prog_ = box_prog_ = 0;
+    cache_.count = 0;
     shape_vbo_ = text_vbo_ = image_vbo_ = box_vbo_ = 0;
     colour_ = atlas_tex_ = depth_ = fbo_ = 0;
     images_.fill(0);
@@ -238,13 +257,15 @@ bool GlesRenderer::configure(int width, int height) {
                     " exceeds GL_MAX_RENDERBUFFER_SIZE " + std::to_string(max_size));
     std::string err;
     if (atlas_.width() == 0 && !atlas_.build(options_.font_path, err)) return fail(err);
-    if ((shape_prog_ = link_program(kShapeVs, kShapeFs, kShapeAttributes, err)) == 0 ||
+    if ((rrect_prog_ = link_program(kShapeVs, kRoundedRectFs, kShapeAttributes, err)) == 0 ||
+        (sector_prog_ = link_program(kShapeVs, kSectorFs, kShapeAttributes, err)) == 0 ||
+        (segment_prog_ = link_program(kShapeVs, kSegmentFs, kShapeAttributes, err)) == 0 ||
         (text_prog_ = link_program(kTexVs, kTextFs, kTexAttributes, err)) == 0 ||
         (image_prog_ = link_program(kTexVs, kImageFs, kTexAttributes, err)) == 0 ||
         (box_prog_ = link_program(kBoxVs, kBoxFs, kBoxAttributes, err)) == 0)
         return fail(err);
     const float scale[2] = {2.f / static_cast<float>(width), 2.f / static_cast<float>(height)};
-    for (unsigned p : {shape_prog_, text_prog_, image_prog_}) {
+    for (unsigned p : {rrect_prog_, sector_prog_, segment_prog_, text_prog_, image_prog_}) {
         glUseProgram(p);
         glUniform2fv(glGetUniformLocation(p, "u_scale"), 1, scale);
         const int tex = glGetUniformLocation(p, "u_tex");
@@ -287,7 +308,8 @@ bool GlesRenderer::configure(int width, int height) {
     make_vbo(text_vbo_, batch_.text.size() * sizeof(TexVertex));
     make_vbo(image_vbo_, batch_.images.size() * sizeof(TexVertex));
     make_vbo(box_vbo_, batch_.boxes.size() * sizeof(BoxVertex));
-    staging_.assign(static_cast<std::size_t>(width) * height * 4, 0);
+    // Twice the frame: the rects kept from the last frame stay where they are.
+    staging_.assign(static_cast<std::size_t>(width) * height * 8, 0);
     if (gl_failed("configure")) return false;
     width_ = width;
     height_ = height;
@@ -335,45 +357,34 @@ bool GlesRenderer::set_image(int id, const hal::ImageView& image) {
         glTexParameteri(GL_TEXTURE_2D, p, GL_CLAMP_TO_EDGE);
     if (gl_failed("set_image: glTexImage2D")) return false;
     batch_.image_present[static_cast<std::size_t>(id)] = true;
+    ++batch_.image_version[static_cast<std::size_t>(id)];
     return true;
 }
 
-void GlesRenderer::draw(std::size_t first, std::size_t count) {
-    glDrawArrays(GL_TRIANGLES, static_cast<GLint>(first), static_cast<GLsizei>(count));
-}
-
-bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLayer& target,
-                          hal::DrawnRects& drawn) {
-    drawn.count = 0;
-    if (!configured_) return fail("render before configure");
-    if (target.width != width_ || target.height != height_ || target.rgba == nullptr ||
-        target.stride < 4 * target.width)
-        return fail("render: the target layer does not match the configured size");
-    if (!make_current()) return false;
-    batch_.build(scene, atlas_, width_, height_);
-    if (batch_.drawn.count == 0) return true;
-
+void GlesRenderer::draw_dirty(const hal::OverlayScene& scene, const std::array<bool, SceneBatch::kMaxRegions>& redraw) {
+    batch_.select(redraw);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glViewport(0, 0, width_, height_);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);
-    // Only the drawn rects are cleared (and read): a full-frame clear is what costs a
+    // Only the rects drawn again are cleared: a full-frame clear is what costs a
     // software rasteriser most.
     glClearColor(0, 0, 0, 0);
     glClearDepthf(1);
     glDepthMask(GL_TRUE);
     glEnable(GL_SCISSOR_TEST);
-    for (std::size_t i = 0; i < batch_.drawn.count; ++i) {
-        const hal::Rect& r = batch_.drawn.rects[i];
+    for (std::size_t i = 0; i < batch_.region_count; ++i) {
+        if (!redraw[i]) continue;
+        const hal::Rect& r = batch_.regions[i];
         glScissor(r.x, r.y, r.width, r.height);
-        glClear(GL_COLOR_BUFFER_BIT | (batch_.depth ? GL_DEPTH_BUFFER_BIT : 0));
+        glClear(GL_COLOR_BUFFER_BIT | (batch_.draw_boxes_used > 0 ? GL_DEPTH_BUFFER_BIT : 0));
     }
     glDisable(GL_SCISSOR_TEST);
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);  // premultiplied "over"
     glActiveTexture(GL_TEXTURE0);
 
-    if (batch_.boxes_used > 0) {
+    if (batch_.draw_boxes_used > 0) {
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LESS);
         glUseProgram(box_prog_);
@@ -381,16 +392,19 @@ bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLaye
         glUniformMatrix4fv(box_clip_uniform_, 1, GL_FALSE, clip.data());
         glBindBuffer(GL_ARRAY_BUFFER, box_vbo_);
         glBufferSubData(GL_ARRAY_BUFFER, 0,
-                        static_cast<GLsizeiptr>(batch_.boxes_used * sizeof(BoxVertex)),
-                        batch_.boxes.data());
+                        static_cast<GLsizeiptr>(batch_.draw_boxes_used * sizeof(BoxVertex)),
+                        batch_.draw_boxes.data());
         attribute(0, 3, sizeof(BoxVertex), offsetof(BoxVertex, x));
         attribute(1, 3, sizeof(BoxVertex), offsetof(BoxVertex, nx));
         attribute(2, 4, sizeof(BoxVertex), offsetof(BoxVertex, colour));
-        glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(batch_.boxes_used));
+        glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(batch_.draw_boxes_used));
         glDisable(GL_DEPTH_TEST);
     }
-    auto bind_shapes = [&] {
-        glUseProgram(shape_prog_);
+    const std::size_t shapes = batch_.shape_range[kListCount];
+    auto shape_list = [&](DrawList list, unsigned program) {
+        const std::size_t first = batch_.shape_range[list], n = batch_.shape_range[list + 1] - first;
+        if (n == 0) return;
+        glUseProgram(program);
         glBindBuffer(GL_ARRAY_BUFFER, shape_vbo_);
         attribute(0, 2, sizeof(ShapeVertex), offsetof(ShapeVertex, x));
         attribute(1, 2, sizeof(ShapeVertex), offsetof(ShapeVertex, lx));
@@ -398,6 +412,7 @@ bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLaye
         attribute(3, 4, sizeof(ShapeVertex), offsetof(ShapeVertex, shape2));
         attribute(4, 4, sizeof(ShapeVertex), offsetof(ShapeVertex, fill));
         attribute(5, 4, sizeof(ShapeVertex), offsetof(ShapeVertex, border));
+        glDrawArrays(GL_TRIANGLES, static_cast<GLint>(first), static_cast<GLsizei>(n));
     };
     auto bind_tex = [&](unsigned program, unsigned vbo) {
         glUseProgram(program);
@@ -409,54 +424,100 @@ bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLaye
         attribute(1, 2, sizeof(TexVertex), offsetof(TexVertex, u));
         attribute(2, 4, sizeof(TexVertex), offsetof(TexVertex, colour));
     };
-    if (batch_.shapes_used > 0) {
-        bind_shapes();
-        glBufferSubData(GL_ARRAY_BUFFER, 0,
-                        static_cast<GLsizeiptr>(batch_.shapes_used * sizeof(ShapeVertex)),
-                        batch_.shapes.data());
-        if (batch_.lines3_end > 0) draw(0, batch_.lines3_end);
+    if (shapes > 0) {
+        glBindBuffer(GL_ARRAY_BUFFER, shape_vbo_);
+        glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(shapes * sizeof(ShapeVertex)),
+                        batch_.draw_shapes.data());
     }
-    if (batch_.images_used > 0) {
+    shape_list(kLines3, segment_prog_);
+    if (batch_.draw_images_used > 0) {
         bind_tex(image_prog_, image_vbo_);
         glBufferSubData(GL_ARRAY_BUFFER, 0,
-                        static_cast<GLsizeiptr>(batch_.images_used * sizeof(TexVertex)),
-                        batch_.images.data());
-        for (std::size_t i = 0; i < batch_.images_used / 6; ++i) {
-            glBindTexture(GL_TEXTURE_2D, images_[static_cast<std::size_t>(batch_.image_ids[i])]);
-            draw(6 * i, 6);
+                        static_cast<GLsizeiptr>(batch_.draw_images_used * sizeof(TexVertex)),
+                        batch_.draw_images.data());
+        for (std::size_t i = 0; i < batch_.draw_images_used / 6; ++i) {
+            glBindTexture(GL_TEXTURE_2D, images_[static_cast<std::size_t>(batch_.draw_image_ids[i])]);
+            glDrawArrays(GL_TRIANGLES, static_cast<GLint>(6 * i), 6);
         }
     }
-    if (batch_.shapes_used > batch_.lines3_end) {
-        bind_shapes();
-        draw(batch_.lines3_end, batch_.shapes_used - batch_.lines3_end);
-    }
-    if (batch_.text_used > 0) {
+    shape_list(kSectors, sector_prog_);
+    shape_list(kQuads, rrect_prog_);
+    shape_list(kLines, segment_prog_);
+    shape_list(kDiscs, sector_prog_);
+    if (batch_.draw_text_used > 0) {
         bind_tex(text_prog_, text_vbo_);
         glBufferSubData(GL_ARRAY_BUFFER, 0,
-                        static_cast<GLsizeiptr>(batch_.text_used * sizeof(TexVertex)),
-                        batch_.text.data());
+                        static_cast<GLsizeiptr>(batch_.draw_text_used * sizeof(TexVertex)),
+                        batch_.draw_text.data());
         glBindTexture(GL_TEXTURE_2D, atlas_tex_);
-        draw(0, batch_.text_used);
+        glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(batch_.draw_text_used));
     }
     glDisable(GL_BLEND);
+}
 
-    // Read back every rect first: a GL error leaves the target untouched.
-    glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    std::size_t offset = 0;
-    for (std::size_t i = 0; i < batch_.drawn.count; ++i) {
-        const hal::Rect& r = batch_.drawn.rects[i];
-        glReadPixels(r.x, r.y, r.width, r.height, GL_RGBA, GL_UNSIGNED_BYTE, &staging_[offset]);
-        offset += static_cast<std::size_t>(r.width) * r.height * 4;
+bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLayer& target,
+                          hal::DrawnRects& drawn) {
+    drawn.count = 0;
+    if (!configured_) return fail("render before configure");
+    if (target.width != width_ || target.height != height_ || target.rgba == nullptr ||
+        target.stride < 4 * target.width)
+        return fail("render: the target layer does not match the configured size");
+    if (!make_current()) return false;
+    batch_.build(scene, atlas_, width_, height_);
+    const std::size_t n = batch_.region_count;
+    const auto& regions = batch_.regions;
+
+    // Regions unchanged since the last frame keep their pixels and read-back; the others
+    // are drawn and read back after the kept ones' staging, or, when that would not
+    // fit, everything is read back from the start of staging_.
+    std::array<bool, SceneBatch::kMaxRegions> redraw{}, read{};
+    std::array<std::size_t, SceneBatch::kMaxRegions> offset{};
+    std::size_t end = 0;
+    bool any_redraw = false;
+    for (std::size_t i = 0; i < n; ++i) {
+        redraw[i] = read[i] = true;
+        for (std::size_t j = 0; j < cache_.count; ++j)
+            if (cache_.rects[j] == regions[i] && cache_.hash[j] == batch_.region_hash[i]) {
+                redraw[i] = read[i] = false;
+                offset[i] = cache_.offset[j];
+                end = std::max(end, offset[i] + 4 * static_cast<std::size_t>(area_of(regions[i])));
+            }
+        any_redraw = any_redraw || redraw[i];
     }
+    for (std::size_t i = 0; i < n; ++i)
+        if (read[i]) {
+            offset[i] = end;
+            end += 4 * static_cast<std::size_t>(area_of(regions[i]));
+        }
+    if (end > staging_.size()) {
+        end = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            read[i] = true;
+            offset[i] = end;
+            end += 4 * static_cast<std::size_t>(area_of(regions[i]));
+        }
+    }
+    cache_.count = 0;  // until this frame's pixels are all in place
+    if (any_redraw) draw_dirty(scene, redraw);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    for (std::size_t i = 0; i < n; ++i)
+        if (read[i]) {
+            const hal::Rect& r = regions[i];
+            glReadPixels(r.x, r.y, r.width, r.height, GL_RGBA, GL_UNSIGNED_BYTE, &staging_[offset[i]]);
+        }
+    // Any GL error before compositing: the target stays untouched.
     if (gl_failed("render")) return false;
-    offset = 0;
-    for (std::size_t i = 0; i < batch_.drawn.count; ++i) {
-        const hal::Rect& r = batch_.drawn.rects[i];
-        composite_over(&staging_[offset], r.width, r.height,
+    for (std::size_t i = 0; i < n; ++i) {
+        const hal::Rect& r = regions[i];
+        composite_over(&staging_[offset[i]], r.width, r.height,
                        target.rgba + static_cast<std::ptrdiff_t>(r.y) * target.stride + 4 * r.x,
                        target.stride);
-        offset += static_cast<std::size_t>(r.width) * r.height * 4;
     }
+    cache_.count = n;
+    std::copy_n(regions.begin(), n, cache_.rects.begin());
+    std::copy_n(batch_.region_hash.begin(), n, cache_.hash.begin());
+    std::copy_n(offset.begin(), n, cache_.offset.begin());
     drawn = batch_.drawn;
     return true;
 }

@@ -9,8 +9,6 @@ namespace endotower::gles {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
-constexpr float kFullCircle = 10.f;  // a half-span past pi: the shader skips the angle test
-enum Kind { kRoundedRect = 0, kSector = 1, kSegment = 2 };
 
 struct Bounds {
     float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
@@ -41,6 +39,18 @@ bool overlap(const hal::Rect& a, const hal::Rect& b) {
 class Builder {
 public:
     Builder(SceneBatch& b, int w, int h) : b_(b), w_(w), h_(h) {}
+    DrawList list = kQuads;
+
+    std::size_t used() const {
+        switch (list) {
+            case kTexts: return b_.text_used;
+            case kImages: return b_.images_used;
+            case kBoxes: return b_.boxes_used;
+            default: return b_.shapes_used;
+        }
+    }
+    // Ends the item opened by the last successful cover().
+    void close() { b_.items[b_.items_used - 1].count = static_cast<std::uint32_t>(used() - b_.items[b_.items_used - 1].first); }
 
     // Grows the bounds by one pixel for the antialiased edge, snaps them to whole
     // pixels and records the rect; false when nothing of it is on screen.
@@ -52,8 +62,13 @@ public:
         const int y0 = std::max(0, static_cast<int>(std::max(bounds.y0, -1.f)));
         const int x1 = std::min(w_, static_cast<int>(std::min(bounds.x1, w_ + 1.f)));
         const int y1 = std::min(h_, static_cast<int>(std::min(bounds.y1, h_ + 1.f)));
-        if (x1 <= x0 || y1 <= y0) return false;
+        if (x1 <= x0 || y1 <= y0 || b_.items_used == b_.items.size()) return false;
         b_.rects.add({x0, y0, x1 - x0, y1 - y0});
+        BatchItem& item = b_.items[b_.items_used++];
+        item.list = list;
+        item.first = static_cast<std::uint32_t>(used());
+        item.count = 0;
+        item.rect = {x0, y0, x1 - x0, y1 - y0};
         // Geometry past the frame is clipped by GL; keep it near so floats stay exact.
         bounds.x0 = static_cast<float>(x0), bounds.y0 = static_cast<float>(y0);
         bounds.x1 = static_cast<float>(x1), bounds.y1 = static_cast<float>(y1);
@@ -73,6 +88,7 @@ public:
             set_colour(v.fill, fill);
             set_colour(v.border, border);
         }
+        close();
     }
 
     void segment(hal::Vec2f a, hal::Vec2f c, float width, const hal::Rgba8& colour) {
@@ -83,7 +99,7 @@ public:
         bounds.add(a.x + half, a.y + half);
         bounds.add(c.x - half, c.y - half);
         const float s[4] = {c.x - a.x, c.y - a.y, half, 0};
-        const float s2[4] = {0, 0, 0, kSegment};
+        const float s2[4] = {0, 0, 0, 0};
         shape(bounds, a.x, a.y, s, s2, colour, colour);
     }
 
@@ -106,9 +122,11 @@ public:
             for (float q = std::ceil(start / (kPi / 2)) * (kPi / 2); q <= end; q += kPi / 2)
                 bounds.add(cx + r_out * std::cos(q), cy + r_out * std::sin(q));
         }
-        const float s[4] = {r_in > 0 ? r_in : -1e6f, r_out, (start + end) / 2,
-                            full ? kFullCircle : (end - start) / 2};
-        const float s2[4] = {border, 0, 0, kSector};
+        // The angular limits as two half-planes through the centre (normals pointing
+        // out of the sector): inside both for a span up to 180 deg, either past it.
+        const float mode = full ? 0.f : (end - start <= kPi ? 1.f : 2.f);
+        const float s[4] = {r_in > 0 ? r_in : -1e6f, r_out, border, mode};
+        const float s2[4] = {std::sin(start), -std::cos(start), -std::sin(end), std::cos(end)};
         shape(bounds, cx, cy, s, s2, fill, border_colour);
     }
 
@@ -154,7 +172,6 @@ public:
         }
         if (!all_front) bounds = {0, 0, static_cast<float>(w_), static_cast<float>(h_)};
         if (!cover(bounds)) return;
-        b_.depth = true;
         // Face f: normal axis f / 2, sign + for even f; two triangles of its 4 corners.
         for (int f = 0; f < 6; ++f) {
             const int axis = f / 2;
@@ -174,6 +191,7 @@ public:
                 set_colour(out.colour, box.faces[static_cast<std::size_t>(f)]);
             }
         }
+        close();
     }
 
     void tex_quad(std::vector<TexVertex>& out, std::size_t& used, float x0, float y0, float x1,
@@ -202,19 +220,26 @@ public:
         float colour[4];
         set_colour(colour, t.colour);
         Bounds bounds;
-        const std::size_t first = b_.text_used;
+        float x = pen;
+        for (std::size_t i = 0; i < n;) {
+            const Glyph& g = face.at(next_code_point(s, i));
+            if (g.width > 0 && g.height > 0) {
+                bounds.add(x + g.left * scale, baseline - g.top * scale);
+                bounds.add(x + (g.left + g.width) * scale, baseline + (g.height - g.top) * scale);
+            }
+            x += g.advance * scale;
+        }
+        if (!cover(bounds)) return;
         for (std::size_t i = 0; i < n;) {
             const Glyph& g = face.at(next_code_point(s, i));
             if (g.width > 0 && g.height > 0 && b_.text_used + 6 <= b_.text.size()) {
                 const float x0 = pen + g.left * scale, y0 = baseline - g.top * scale;
                 const float x1 = x0 + g.width * scale, y1 = y0 + g.height * scale;
                 tex_quad(b_.text, b_.text_used, x0, y0, x1, y1, g.u0, g.v0, g.u1, g.v1, colour);
-                bounds.add(x0, y0);
-                bounds.add(x1, y1);
             }
             pen += g.advance * scale;
         }
-        if (!cover(bounds)) b_.text_used = first;
+        close();
     }
 
     void image(const hal::SceneImage& im) {
@@ -227,10 +252,11 @@ public:
         bounds.add(im.x + im.width, im.y + im.height);
         Bounds covered = bounds;
         if (!cover(covered)) return;
-        const float colour[4] = {std::clamp(im.opacity, 0.f, 1.f), 0, 0, 0};
-        b_.image_ids[b_.images_used / 6] = im.image_id;
+        // The id rides in the colour's second channel (the shader reads only the first).
+        const float colour[4] = {std::clamp(im.opacity, 0.f, 1.f), static_cast<float>(im.image_id), 0, 0};
         tex_quad(b_.images, b_.images_used, bounds.x0, bounds.y0, bounds.x1, bounds.y1, 0, 0, 1, 1,
                  colour);
+        close();
     }
 
 private:
@@ -275,8 +301,8 @@ void RectSet::add(const hal::Rect& r) {
     rects_[count_++] = grown;
 }
 
-void RectSet::finish(hal::DrawnRects& out) {
-    while (count_ > out.rects.size()) {
+void RectSet::finish(hal::Rect* out, std::size_t& count, std::size_t max) {
+    while (count_ > max) {
         std::size_t bi = 0, bj = 1;
         long long best = -1;
         for (std::size_t i = 0; i < count_; ++i)
@@ -290,8 +316,8 @@ void RectSet::finish(hal::DrawnRects& out) {
         rects_[bi] = rects_[--count_];
         add(u);
     }
-    out.count = count_;
-    std::copy(rects_.begin(), rects_.begin() + static_cast<std::ptrdiff_t>(count_), out.rects.begin());
+    count = count_;
+    std::copy(rects_.begin(), rects_.begin() + static_cast<std::ptrdiff_t>(count_), out);
 }
 
 std::array<float, 16> clip_from_camera(const hal::SceneCamera& c, int width, int height) {
@@ -311,36 +337,61 @@ void SceneBatch::reserve() {
     static const hal::OverlayScene kCapacities;  // only the list sizes are read
     const hal::OverlayScene* s = &kCapacities;
     const std::size_t line_segments = s->lines.items.size() * 64 + s->lines3.items.size() * 63;
-    const std::size_t items = s->quads.items.size() + s->sectors.items.size() +
-                              s->discs.items.size() + line_segments;
-    shapes.resize(6 * items);
+    const std::size_t shape_items = s->quads.items.size() + s->sectors.items.size() +
+                                    s->discs.items.size() + line_segments;
+    shapes.resize(6 * shape_items);
     text.resize(6 * s->texts.items.size() * sizeof(hal::SceneText::utf8));
     images.resize(6 * s->images.items.size());
     boxes.resize(36 * s->boxes.items.size());
+    items.resize(shape_items + s->texts.items.size() + s->images.items.size() +
+                 s->boxes.items.size());
+    draw_shapes.resize(shapes.size());
+    draw_text.resize(text.size());
+    draw_images.resize(images.size());
+    draw_boxes.resize(boxes.size());
 }
+
+namespace {
+
+// FNV-1a over 32-bit words: cheap, and enough to tell a changed item from an unchanged one.
+std::uint64_t hash_words(std::uint64_t h, const void* data, std::size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i + 4 <= bytes; i += 4) {
+        std::uint32_t w;
+        std::memcpy(&w, p + i, 4);
+        h = (h ^ w) * 1099511628211ull;
+    }
+    return h;
+}
+
+}  // namespace
 
 void SceneBatch::build(const hal::OverlayScene& scene, const GlyphAtlas& atlas, int width,
                        int height) {
-    shapes_used = text_used = images_used = boxes_used = 0;
-    depth = false;
+    shapes_used = text_used = images_used = boxes_used = items_used = 0;
     rects.clear();
     Builder b(*this, width, height);
     const hal::SceneCamera& cam = scene.camera;
-    if (cam.valid() && cam.far_mm > cam.near_mm && cam.near_mm > 0) {
+    const bool camera_ok = cam.valid() && cam.far_mm > cam.near_mm && cam.near_mm > 0;
+    if (camera_ok) {
+        b.list = kBoxes;
         for (const hal::SceneBox& box : scene.boxes) b.box(cam, box);
+        b.list = kLines3;
         for (const hal::SceneLine3& l : scene.lines3)
             for (std::size_t i = 1; i < std::min<std::size_t>(l.count, l.points.size()); ++i)
                 b.segment3(cam, l.points[i - 1], l.points[i], l.width_px, l.colour);
     }
-    lines3_end = shapes_used;
+    b.list = kImages;
     for (const hal::SceneImage& im : scene.images) b.image(im);
     constexpr float kDeg = kPi / 180.f;
+    b.list = kSectors;
     for (const hal::SceneSector& s : scene.sectors) {
         float end = s.end_deg;
         while (end <= s.start_deg) end += 360.f;  // "from start clockwise to end"
         b.sector(s.cx, s.cy, s.r_inner, s.r_outer, s.start_deg * kDeg,
                  std::min(end, s.start_deg + 360.f) * kDeg, s.border_px, s.fill, s.border);
     }
+    b.list = kQuads;
     for (const hal::SceneQuad& q : scene.quads) {
         if (q.width <= 0 || q.height <= 0) continue;
         Bounds bounds;
@@ -349,22 +400,91 @@ void SceneBatch::build(const hal::OverlayScene& scene, const GlyphAtlas& atlas, 
         const float s[4] = {q.width / 2, q.height / 2,
                             std::clamp(q.corner_px, 0.f, std::min(q.width, q.height) / 2),
                             q.border_px};
-        const float s2[4] = {0, 0, 0, kRoundedRect};
+        const float s2[4] = {0, 0, 0, 0};
         b.shape(bounds, q.x + q.width / 2, q.y + q.height / 2, s, s2, q.fill, q.border);
     }
+    b.list = kLines;
     for (const hal::SceneLine& l : scene.lines) {
         const std::size_t n = std::min<std::size_t>(l.count, l.points.size());
         for (std::size_t i = 1; i < n; ++i) b.segment(l.points[i - 1], l.points[i], l.width_px, l.colour);
         if (l.closed && n >= 3) b.segment(l.points[n - 1], l.points[0], l.width_px, l.colour);
     }
+    b.list = kDiscs;
     for (const hal::SceneDisc& d : scene.discs) {
         const float sweep = std::min(d.sweep_deg, 360.f);
         if (sweep <= 0) continue;
         b.sector(d.cx, d.cy, d.r_inner, d.r_outer, -kPi / 2, -kPi / 2 + sweep * kDeg, 0, d.colour,
                  d.colour);
     }
+    b.list = kTexts;
     for (const hal::SceneText& t : scene.texts) b.text(t, atlas);
-    rects.finish(drawn);
+    rects.finish(regions.data(), region_count, kMaxRegions);
+    rects.finish(drawn.rects.data(), drawn.count, drawn.rects.size());
+
+    // What each rect shows: its geometry and its items' vertices in draw order (the
+    // camera for boxes, the image's version for images).
+    for (std::size_t i = 0; i < region_count; ++i)
+        region_hash[i] = hash_words(14695981039346656037ull, &regions[i], sizeof(hal::Rect));
+    const std::array<float, 16> clip = clip_from_camera(cam, width, height);
+    for (std::size_t k = 0; k < items_used; ++k) {
+        BatchItem& item = items[k];
+        const hal::Rect& r = item.rect;
+        for (std::size_t i = 0; i < region_count; ++i) {
+            const hal::Rect& d = regions[i];
+            if (r.x >= d.x && r.y >= d.y && r.x + r.width <= d.x + d.width &&
+                r.y + r.height <= d.y + d.height) {
+                item.region = i;
+                break;
+            }
+        }
+        std::uint64_t& h = region_hash[item.region];
+        h = hash_words(h, &item.list, 1) ^ item.list;
+        switch (item.list) {
+            case kTexts: h = hash_words(h, &text[item.first], item.count * sizeof(TexVertex)); break;
+            case kImages: {
+                const auto id = static_cast<std::size_t>(images[item.first].colour[1]);
+                h = hash_words(h, &images[item.first], item.count * sizeof(TexVertex));
+                h = hash_words(h, &image_version[id], sizeof(std::uint64_t));
+                break;
+            }
+            case kBoxes:
+                h = hash_words(h, &boxes[item.first], item.count * sizeof(BoxVertex));
+                h = hash_words(h, clip.data(), sizeof clip);
+                break;
+            default: h = hash_words(h, &shapes[item.first], item.count * sizeof(ShapeVertex));
+        }
+    }
+}
+
+void SceneBatch::select(const std::array<bool, kMaxRegions>& redraw) {
+    std::array<std::size_t, kListCount> shape_count{};
+    std::size_t n_shapes = 0;
+    draw_text_used = draw_images_used = draw_boxes_used = 0;
+    for (std::size_t k = 0; k < items_used; ++k) {
+        const BatchItem& item = items[k];
+        if (!redraw[item.region]) continue;
+        switch (item.list) {
+            case kTexts:
+                std::copy_n(&text[item.first], item.count, &draw_text[draw_text_used]);
+                draw_text_used += item.count;
+                break;
+            case kImages:
+                draw_image_ids[draw_images_used / 6] = static_cast<int>(images[item.first].colour[1]);
+                std::copy_n(&images[item.first], item.count, &draw_images[draw_images_used]);
+                draw_images_used += item.count;
+                break;
+            case kBoxes:
+                std::copy_n(&boxes[item.first], item.count, &draw_boxes[draw_boxes_used]);
+                draw_boxes_used += item.count;
+                break;
+            default:  // shapes come list by list, in DrawList order
+                std::copy_n(&shapes[item.first], item.count, &draw_shapes[n_shapes]);
+                n_shapes += item.count;
+                shape_count[item.list] += item.count;
+        }
+    }
+    shape_range[0] = 0;
+    for (std::size_t l = 0; l < kListCount; ++l) shape_range[l + 1] = shape_range[l] + shape_count[l];
 }
 
 }  // namespace endotower::gles

@@ -385,6 +385,47 @@ TEST_F(GlesRendererTest, FullMenuRectsCoverEveryChangedPixel) {
     EXPECT_GT(changed, 10000u);
 }
 
+// Regions unchanged since the last frame are reused; the result must equal a render
+// from scratch, bit for bit, whatever changed in between.
+TEST_F(GlesRendererTest, ReusedRegionsEqualAFreshRender) {
+    std::string error;
+    auto fresh = create_gles_renderer(error);
+    ASSERT_TRUE(fresh && fresh->configure(kW, kH)) << error;
+    const std::uint8_t px[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128};
+    const std::uint8_t px2[16] = {9, 9, 9, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128};
+    ASSERT_TRUE(renderer_->set_image(0, {2, 2, 8, px}));
+    ASSERT_TRUE(fresh->set_image(0, {2, 2, 8, px2}));
+    hal::OverlayScene menu;
+    menu.camera = {.fx = 300, .fy = 300, .cx = 159.5, .cy = 119.5};
+    for (int i = 0; i < 6; ++i)
+        menu.quads.add({.x = 10.f + 50 * i, .y = 10, .width = 40, .height = 30, .corner_px = 5,
+                        .fill = {40, 80, 200, 150}});
+    menu.images.add({.image_id = 0, .x = 200, .y = 150, .width = 60, .height = 60});
+    hal::SceneBox box;
+    box.camera_from_model = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -40, 30, 200, 1};
+    box.faces.fill({200, 200, 40, 255});
+    menu.boxes.add(box);
+    Target t;
+    t.pattern();
+    hal::OverlayScene frame = menu;
+    frame.discs.add({.cx = 100, .cy = 150, .r_outer = 8, .colour = {255, 255, 0, 255}});
+    render(frame, t);
+    // Next frame: the cursor moved, one button highlighted, the image replaced.
+    frame = menu;
+    frame.discs.add({.cx = 130, .cy = 160, .r_outer = 8, .colour = {255, 255, 0, 255}});
+    frame.quads.items[2].fill = {255, 255, 255, 200};
+    ASSERT_TRUE(renderer_->set_image(0, {2, 2, 8, px2}));
+    const Target reused = render(frame, t);
+    Target scratch = t;
+    scratch.layer.rgba = scratch.px.data();
+    hal::DrawnRects drawn;
+    ASSERT_TRUE(fresh->render(frame, scratch.layer, drawn)) << fresh->error();
+    EXPECT_EQ(reused.px, scratch.px);
+    // And the same scene again: nothing to draw, same pixels.
+    const Target again = render(frame, t);
+    EXPECT_EQ(again.px, scratch.px);
+}
+
 TEST_F(GlesRendererTest, WrongTargetSizeIsRefusedUntouched) {
     Target t;
     t.layer.width = kW - 1;
