@@ -1,8 +1,13 @@
-// libFuzzer target: the media folder's image decoders (DICOM through DCMTK, PNG and
-// JPEG through OpenCV), the parsers of files that come from outside. Input: the file.
-// Either an image of a sane size comes back, or an error naming the file.
+// libFuzzer target: the media folder's image loader (DICOM through DCMTK, PNG and
+// JPEG through OpenCV), the parsers of files that come from outside. Input: the file,
+// written to a per-process temporary file (DICOM is read from a file, see
+// media_image.cpp). Either an image of a sane size comes back, or an error naming
+// the file.
+#include <unistd.h>
+
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "endotower/media/media_image.hpp"
@@ -10,10 +15,15 @@
 using namespace endotower;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    static const std::string path = "/tmp/endotower_fuzz_media_" + std::to_string(getpid());
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (f == nullptr) __builtin_trap();
+    if (size > 0 && std::fwrite(data, 1, size, f) != size) __builtin_trap();
+    std::fclose(f);
     media::MediaImage img;
     std::string error;
-    if (!media::decode_media_image(data, size, "fuzz.img", img, error)) {
-        if (error.rfind("fuzz.img: ", 0) != 0 || !img.rgba.empty()) __builtin_trap();
+    if (!media::load_media_image(path, img, error)) {
+        if (error.rfind(path + ": ", 0) != 0 || !img.rgba.empty()) __builtin_trap();
         return 0;
     }
     if (img.width <= 0 || img.height <= 0 || img.width > media::MediaImage::kMaxSide ||
