@@ -32,30 +32,60 @@ hal::OverlayScene full_menu(float shift) {
         t.x = x, t.y = y, t.size_px = size, t.align = a, t.colour = {255, 255, 255, 255};
         s.texts.add(t);
     };
-    const char* names[12] = {"Preoperative images", "Patient record", "3-D effects", "Exit",
-                             "CT", "MRI", "X-ray", "Return", "Image box", "Suture", "Next",
+    const char* names[12] = {"Preoperative images",
+                             "Patient record",
+                             "3-D effects",
+                             "Exit",
+                             "CT",
+                             "MRI",
+                             "X-ray",
+                             "Return",
+                             "Image box",
+                             "Suture",
+                             "Next",
                              "Previous"};
     for (int i = 0; i < 12; ++i) {  // two columns of buttons down the sides
         const float x = (i < 6 ? 40.f : 1600.f) + shift, y = 120.f + float(i % 6) * 120.f;
-        s.quads.add({.x = x, .y = y, .width = 280, .height = 90, .corner_px = 14, .border_px = 3,
-                     .fill = {30, 30, 30, 170}, .border = {255, 255, 255, 230}});
+        s.quads.add({.x = x,
+                     .y = y,
+                     .width = 280,
+                     .height = 90,
+                     .corner_px = 14,
+                     .border_px = 3,
+                     .fill = {30, 30, 30, 170},
+                     .border = {255, 255, 255, 230}});
         text(names[i], x + 140, y + 45, 32, hal::SceneText::Align::kCentre);
     }
     for (int i = 0; i < 8; ++i)  // the ring menu around the tool
-        s.sectors.add({.cx = 1150 + shift, .cy = 700, .r_inner = 90, .r_outer = 200,
-                       .start_deg = float(i * 45), .end_deg = float(i * 45 + 42),
-                       .border_px = 2, .fill = {0, 110, 230, 150}, .border = {255, 255, 255, 255}});
-    s.quads.add({.x = 400 + shift, .y = 40, .width = 560, .height = 200, .corner_px = 10,
+        s.sectors.add({.cx = 1150 + shift,
+                       .cy = 700,
+                       .r_inner = 90,
+                       .r_outer = 200,
+                       .start_deg = float(i * 45),
+                       .end_deg = float(i * 45 + 42),
+                       .border_px = 2,
+                       .fill = {0, 110, 230, 150},
+                       .border = {255, 255, 255, 255}});
+    s.quads.add({.x = 400 + shift,
+                 .y = 40,
+                 .width = 560,
+                 .height = 200,
+                 .corner_px = 10,
                  .fill = {0, 0, 0, 140}});
     text("Patient: Anna Muller  ID 0042", 420 + shift, 60, 28, hal::SceneText::Align::kTopLeft);
     text("Born 1971-04-02  Cholecystectomy", 420 + shift, 110, 28, hal::SceneText::Align::kTopLeft);
     text("Notes: allergic to latex", 420 + shift, 160, 28, hal::SceneText::Align::kTopLeft);
-    s.images.add({.image_id = 0, .x = 1000 + shift, .y = 60, .width = 400, .height = 400, .opacity = 0.9f});
+    s.images.add(
+        {.image_id = 0, .x = 1000 + shift, .y = 60, .width = 400, .height = 400, .opacity = 0.9f});
     hal::SceneBox box;  // the 40 mm image box at 80 mm, turned
     const float c = std::cos(0.5f), sn = std::sin(0.5f);
     box.camera_from_model = {c, 0, -sn, 0, 0, 1, 0, 0, sn, 0, c, 0, -30 + shift / 10, 20, 80, 1};
-    box.faces = {{{200, 80, 80, 220}, {200, 80, 80, 220}, {80, 200, 80, 220},
-                  {80, 200, 80, 220}, {80, 80, 200, 220}, {80, 80, 200, 220}}};
+    box.faces = {{{200, 80, 80, 220},
+                  {200, 80, 80, 220},
+                  {80, 200, 80, 220},
+                  {80, 200, 80, 220},
+                  {80, 80, 200, 220},
+                  {80, 80, 200, 220}}};
     s.boxes.add(box);
     return s;
 }
@@ -63,7 +93,11 @@ hal::OverlayScene full_menu(float shift) {
 // The cursor (the tool tip) and its dwell-progress arc.
 void cursor(hal::OverlayScene& s, float x, float y, float sweep) {
     s.discs.add({.cx = x, .cy = y, .r_outer = 10, .colour = {255, 255, 0, 255}});
-    s.discs.add({.cx = x, .cy = y, .r_inner = 16, .r_outer = 22, .sweep_deg = sweep,
+    s.discs.add({.cx = x,
+                 .cy = y,
+                 .r_inner = 16,
+                 .r_outer = 22,
+                 .sweep_deg = sweep,
                  .colour = {255, 255, 0, 200}});
 }
 
@@ -92,8 +126,10 @@ void BM_RenderFullMenu1080p(benchmark::State& state) {
         const int k = frame++;
         const float t = float(k % 120) / 120.f * 6.2832f;
         scene = menus[state.range(0) == 0 ? k % 2 : 0];
-        if (state.range(0) == 2) cursor(scene, 1150 + 150 * std::cos(t), 700 + 150 * std::sin(t), float(k % 60) * 6);
-        else cursor(scene, 680 + 80 * std::cos(t), 370 + 80 * std::sin(t), float(k % 60) * 6);
+        if (state.range(0) == 2)
+            cursor(scene, 1150 + 150 * std::cos(t), 700 + 150 * std::sin(t), float(k % 60) * 6);
+        else
+            cursor(scene, 680 + 80 * std::cos(t), 370 + 80 * std::sin(t), float(k % 60) * 6);
     };
     hal::OverlayLayer layer;
     layer.width = kW, layer.height = kH, layer.stride = 4 * kW, layer.rgba = px.data();
@@ -120,14 +156,21 @@ void BM_RenderFullMenu1080p(benchmark::State& state) {
     }
     std::sort(ms.begin(), ms.end());
     std::int64_t area = 0;
-    for (std::size_t i = 0; i < drawn.count; ++i) area += std::int64_t(drawn.rects[i].width) * drawn.rects[i].height;
+    for (std::size_t i = 0; i < drawn.count; ++i)
+        area += std::int64_t(drawn.rects[i].width) * drawn.rects[i].height;
     state.counters["median_ms"] = ms[ms.size() / 2];
     state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
     state.counters["allocs_per_frame"] = double(allocs) / double(frames);
     state.counters["rects"] = double(drawn.count);
     state.counters["rect_mpix"] = double(area) / 1e6;
 }
-BENCHMARK(BM_RenderFullMenu1080p)->Arg(0)->Arg(1)->Arg(2)->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond)->MinTime(3);
+BENCHMARK(BM_RenderFullMenu1080p)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->MeasureProcessCPUTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(3);
 
 }  // namespace
 

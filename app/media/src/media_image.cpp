@@ -3,8 +3,8 @@
 #include <dcmtk/config/osconfig.h>  // first, as DCMTK requires
 #include <dcmtk/dcmdata/dcdeftag.h>
 #include <dcmtk/dcmdata/dcfilefo.h>
-#include <dcmtk/dcmdata/dcstack.h>
 #include <dcmtk/dcmdata/dcrledrg.h>
+#include <dcmtk/dcmdata/dcstack.h>
 #include <dcmtk/dcmimage/diregist.h>  // colour images
 #include <dcmtk/dcmimgle/dcmimage.h>
 #include <dcmtk/dcmjpeg/djdecode.h>
@@ -49,28 +49,34 @@ bool decode_dicom(const std::string& path, std::uintmax_t file_size, MediaImage&
                   std::string& error) {
     init_dcmtk();
     DcmFileFormat file;
-    const OFCondition read = file.loadFile(OFFilename(path.c_str()), EXS_Unknown, EGL_noChange, 65536);
-    if (read.bad()) return fail(error, path, std::string("not a readable DICOM file (") + read.text() + ")");
+    const OFCondition read =
+        file.loadFile(OFFilename(path.c_str()), EXS_Unknown, EGL_noChange, 65536);
+    if (read.bad())
+        return fail(error, path, std::string("not a readable DICOM file (") + read.text() + ")");
     DcmStack stack;
     while (file.nextObject(stack, OFTrue).good()) {
         const Uint32 length = stack.top()->getLengthField();
         if (length != DCM_UndefinedLength && length > file_size)
-            return fail(error, path, "corrupt DICOM file (element " + std::string(stack.top()->getTag().toString().c_str()) +
-                                         " longer than the file)");
+            return fail(error, path,
+                        "corrupt DICOM file (element " +
+                            std::string(stack.top()->getTag().toString().c_str()) +
+                            " longer than the file)");
     }
     DcmDataset* ds = file.getDataset();
     Uint16 rows = 0, cols = 0;
-    if (ds->findAndGetUint16(DCM_Rows, rows).bad() || ds->findAndGetUint16(DCM_Columns, cols).bad() ||
-        rows == 0 || cols == 0)
+    if (ds->findAndGetUint16(DCM_Rows, rows).bad() ||
+        ds->findAndGetUint16(DCM_Columns, cols).bad() || rows == 0 || cols == 0)
         return fail(error, path, "DICOM file without an image (no Rows/Columns)");
     if (rows > MediaImage::kMaxSide || cols > MediaImage::kMaxSide)
-        return fail(error, path, "DICOM image " + std::to_string(cols) + "x" + std::to_string(rows) +
-                                     " larger than " + std::to_string(MediaImage::kMaxSide));
+        return fail(error, path,
+                    "DICOM image " + std::to_string(cols) + "x" + std::to_string(rows) +
+                        " larger than " + std::to_string(MediaImage::kMaxSide));
     // The first frame only: a viewer shows one image per file.
     DicomImage image(&file, ds->getOriginalXfer(), CIF_UsePartialAccessToPixelData, 0, 1);
     if (image.getStatus() != EIS_Normal)
-        return fail(error, path, std::string("DICOM image not decodable (") +
-                                     DicomImage::getString(image.getStatus()) + ")");
+        return fail(error, path,
+                    std::string("DICOM image not decodable (") +
+                        DicomImage::getString(image.getStatus()) + ")");
     const bool mono = image.isMonochrome();
     if (mono) {
         // Window/level: the file's first VOI window, else its min/max range.
@@ -86,8 +92,10 @@ bool decode_dicom(const std::string& path, std::uintmax_t file_size, MediaImage&
     const std::size_t n = static_cast<std::size_t>(w) * h;
     for (std::size_t i = 0; i < n; ++i) {
         std::uint8_t* q = &out.rgba[4 * i];
-        if (mono) q[0] = q[1] = q[2] = p[i];
-        else q[0] = p[3 * i], q[1] = p[3 * i + 1], q[2] = p[3 * i + 2];  // interleaved RGB
+        if (mono)
+            q[0] = q[1] = q[2] = p[i];
+        else
+            q[0] = p[3 * i], q[1] = p[3 * i + 1], q[2] = p[3 * i + 2];  // interleaved RGB
         q[3] = 255;
     }
     return true;
@@ -127,16 +135,24 @@ bool decode_png_jpeg(const std::uint8_t* data, std::size_t size, const std::stri
     }
     if (img.empty()) return fail(error, name, "corrupt image (the decoder refused it)");
     if (img.cols > MediaImage::kMaxSide || img.rows > MediaImage::kMaxSide)
-        return fail(error, name, "image " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
-                                     " larger than " + std::to_string(MediaImage::kMaxSide));
+        return fail(error, name,
+                    "image " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                        " larger than " + std::to_string(MediaImage::kMaxSide));
     if (img.depth() == CV_16U) img.convertTo(img, CV_8U, 1.0 / 257.0);
     if (img.depth() != CV_8U) return fail(error, name, "unsupported sample type");
     cv::Mat rgba;
     switch (img.channels()) {
-        case 1: cv::cvtColor(img, rgba, cv::COLOR_GRAY2RGBA); break;
-        case 3: cv::cvtColor(img, rgba, cv::COLOR_BGR2RGBA); break;
-        case 4: cv::cvtColor(img, rgba, cv::COLOR_BGRA2RGBA); break;
-        default: return fail(error, name, std::to_string(img.channels()) + " channels");
+        case 1:
+            cv::cvtColor(img, rgba, cv::COLOR_GRAY2RGBA);
+            break;
+        case 3:
+            cv::cvtColor(img, rgba, cv::COLOR_BGR2RGBA);
+            break;
+        case 4:
+            cv::cvtColor(img, rgba, cv::COLOR_BGRA2RGBA);
+            break;
+        default:
+            return fail(error, name, std::to_string(img.channels()) + " channels");
     }
     out.width = rgba.cols, out.height = rgba.rows;
     out.rgba.assign(rgba.datastart, rgba.dataend);

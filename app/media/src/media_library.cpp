@@ -43,13 +43,15 @@ bool MediaLibrary::load(const std::string& folder, std::string& error) {
     for (const fs::path& f : files) {
         if (f.filename() == kPatientFile) continue;
         const std::string ext = lower_extension(f);
-        const bool image = ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".dcm" ||
-                           has_dicom_mark(f);
+        const bool image =
+            ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".dcm" || has_dicom_mark(f);
         if (!image) continue;
         MediaImage img;
         std::string why;
-        if (load_media_image(f.string(), img, why)) images_.push_back(std::move(img));
-        else problems_.push_back(why);
+        if (load_media_image(f.string(), img, why))
+            images_.push_back(std::move(img));
+        else
+            problems_.push_back(why);
     }
     PatientRecord record;
     std::string why;

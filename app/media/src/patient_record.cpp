@@ -49,7 +49,8 @@ bool parse_patient_record(std::string_view text, const std::string& file, Patien
         const std::string_view key = trim(line.substr(0, colon));
         const std::string_view value = trim(line.substr(colon + 1));
         if (value.size() > kMaxValue) {
-            error = where + "value of '" + std::string(key) + "' longer than " + std::to_string(kMaxValue) + " bytes";
+            error = where + "value of '" + std::string(key) + "' longer than " +
+                    std::to_string(kMaxValue) + " bytes";
             return false;
         }
         if (key == "notes") {

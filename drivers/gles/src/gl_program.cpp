@@ -64,32 +64,49 @@ unsigned link_program(const char* vertex_source, const char* fragment_source,
 
 std::string gl_error_text(unsigned code) {
     switch (code) {
-        case GL_INVALID_ENUM: return hex_code("GL_INVALID_ENUM", code);
-        case GL_INVALID_VALUE: return hex_code("GL_INVALID_VALUE", code);
-        case GL_INVALID_OPERATION: return hex_code("GL_INVALID_OPERATION", code);
-        case GL_OUT_OF_MEMORY: return hex_code("GL_OUT_OF_MEMORY", code);
+        case GL_INVALID_ENUM:
+            return hex_code("GL_INVALID_ENUM", code);
+        case GL_INVALID_VALUE:
+            return hex_code("GL_INVALID_VALUE", code);
+        case GL_INVALID_OPERATION:
+            return hex_code("GL_INVALID_OPERATION", code);
+        case GL_OUT_OF_MEMORY:
+            return hex_code("GL_OUT_OF_MEMORY", code);
         case GL_INVALID_FRAMEBUFFER_OPERATION:
             return hex_code("GL_INVALID_FRAMEBUFFER_OPERATION", code);
         case GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT:
             return hex_code("GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT", code);
-        case GL_FRAMEBUFFER_UNSUPPORTED: return hex_code("GL_FRAMEBUFFER_UNSUPPORTED", code);
-        default: return hex_code("GL error", code);
+        case GL_FRAMEBUFFER_UNSUPPORTED:
+            return hex_code("GL_FRAMEBUFFER_UNSUPPORTED", code);
+        default:
+            return hex_code("GL error", code);
     }
 }
 
 std::string egl_error_text(int code) {
     switch (code) {
-        case EGL_NOT_INITIALIZED: return hex_code("EGL_NOT_INITIALIZED", code);
-        case EGL_BAD_ACCESS: return hex_code("EGL_BAD_ACCESS", code);
-        case EGL_BAD_ALLOC: return hex_code("EGL_BAD_ALLOC", code);
-        case EGL_BAD_ATTRIBUTE: return hex_code("EGL_BAD_ATTRIBUTE", code);
-        case EGL_BAD_CONFIG: return hex_code("EGL_BAD_CONFIG", code);
-        case EGL_BAD_CONTEXT: return hex_code("EGL_BAD_CONTEXT", code);
-        case EGL_BAD_DISPLAY: return hex_code("EGL_BAD_DISPLAY", code);
-        case EGL_BAD_MATCH: return hex_code("EGL_BAD_MATCH", code);
-        case EGL_BAD_PARAMETER: return hex_code("EGL_BAD_PARAMETER", code);
-        case EGL_BAD_SURFACE: return hex_code("EGL_BAD_SURFACE", code);
-        default: return hex_code("EGL error", static_cast<unsigned>(code));
+        case EGL_NOT_INITIALIZED:
+            return hex_code("EGL_NOT_INITIALIZED", code);
+        case EGL_BAD_ACCESS:
+            return hex_code("EGL_BAD_ACCESS", code);
+        case EGL_BAD_ALLOC:
+            return hex_code("EGL_BAD_ALLOC", code);
+        case EGL_BAD_ATTRIBUTE:
+            return hex_code("EGL_BAD_ATTRIBUTE", code);
+        case EGL_BAD_CONFIG:
+            return hex_code("EGL_BAD_CONFIG", code);
+        case EGL_BAD_CONTEXT:
+            return hex_code("EGL_BAD_CONTEXT", code);
+        case EGL_BAD_DISPLAY:
+            return hex_code("EGL_BAD_DISPLAY", code);
+        case EGL_BAD_MATCH:
+            return hex_code("EGL_BAD_MATCH", code);
+        case EGL_BAD_PARAMETER:
+            return hex_code("EGL_BAD_PARAMETER", code);
+        case EGL_BAD_SURFACE:
+            return hex_code("EGL_BAD_SURFACE", code);
+        default:
+            return hex_code("EGL error", static_cast<unsigned>(code));
     }
 }
 

@@ -17,8 +17,9 @@ namespace endotower::gles {
 
 namespace {
 
-#define ENDOTOWER_HIGHP \
-    "#ifdef GL_FRAGMENT_PRECISION_HIGH\nprecision highp float;\n#else\nprecision mediump float;\n#endif\n"
+#define ENDOTOWER_HIGHP                                                                    \
+    "#ifdef GL_FRAGMENT_PRECISION_HIGH\nprecision highp float;\n#else\nprecision mediump " \
+    "float;\n#endif\n"
 
 // 2-D items: pixel edges to clip space; GL row 0 is image row 0 (no flip), so
 // glReadPixels returns the image's rows in order.
@@ -43,9 +44,9 @@ void main() {
 // kind: llvmpipe runs both sides of a branch, so a shared shader would pay for all.
 #define ENDOTOWER_SHAPE_HEAD \
     ENDOTOWER_HIGHP "varying vec2 v_local;\nvarying vec4 v_shape, v_shape2, v_fill, v_border;\n"
-#define ENDOTOWER_SHAPE_TAIL \
+#define ENDOTOWER_SHAPE_TAIL                                                                   \
     "    vec4 c = bw > 0.0 ? mix(v_border, v_fill, clamp(0.5 - d - bw, 0.0, 1.0)) : v_fill;\n" \
-    "    float a = c.a * clamp(0.5 - d, 0.0, 1.0);\n" \
+    "    float a = c.a * clamp(0.5 - d, 0.0, 1.0);\n"                                          \
     "    gl_FragColor = vec4(c.rgb * a, a);\n}\n"
 
 // Rounded rect: half size, corner radius, border width.
@@ -136,12 +137,14 @@ varying vec4 v_colour;
 void main() { gl_FragColor = vec4(v_colour.rgb * v_colour.a, v_colour.a); }
 )";
 
-constexpr const char* kShapeAttributes[] = {"a_pos",    "a_local",  "a_shape", "a_shape2",
-                                            "a_fill",   "a_border", nullptr};
+constexpr const char* kShapeAttributes[] = {"a_pos",  "a_local",  "a_shape", "a_shape2",
+                                            "a_fill", "a_border", nullptr};
 constexpr const char* kTexAttributes[] = {"a_pos", "a_uv", "a_colour", nullptr};
 constexpr const char* kBoxAttributes[] = {"a_pos", "a_normal", "a_colour", nullptr};
 
-long long area_of(const hal::Rect& r) { return static_cast<long long>(r.width) * r.height; }
+long long area_of(const hal::Rect& r) {
+    return static_cast<long long>(r.width) * r.height;
+}
 
 void attribute(unsigned slot, int size, std::size_t stride, std::size_t offset) {
     glEnableVertexAttribArray(slot);
@@ -178,7 +181,7 @@ private:
     }
     bool make_current();
     void release_gl();
-    
+
     EGLDisplay display_;
     EGLContext context_;
     EGLSurface surface_;
@@ -206,7 +209,8 @@ private:
         std::array<std::size_t, SceneBatch::kMaxRegions> offset{};
         std::size_t count = 0;
     } cache_;
-    void draw_dirty(const hal::OverlayScene& scene, const std::array<bool, SceneBatch::kMaxRegions>& redraw);
+    void draw_dirty(const hal::OverlayScene& scene,
+                    const std::array<bool, SceneBatch::kMaxRegions>& redraw);
 };
 
 GlesRenderer::~GlesRenderer() {
@@ -247,7 +251,8 @@ void GlesRenderer::release_gl() {
 
 bool GlesRenderer::configure(int width, int height) {
     if (width <= 0 || height <= 0)
-        return fail("configure: invalid size " + std::to_string(width) + "x" + std::to_string(height));
+        return fail("configure: invalid size " + std::to_string(width) + "x" +
+                    std::to_string(height));
     if (!make_current()) return false;
     release_gl();
     GLint max_size = 0;
@@ -324,8 +329,8 @@ bool GlesRenderer::set_image(int id, const hal::ImageView& image) {
     if (image.width <= 0 || image.height <= 0 || image.rgba == nullptr ||
         image.stride < 4 * image.width)
         return fail("set_image " + std::to_string(id) + ": empty or malformed image (" +
-                    std::to_string(image.width) + "x" + std::to_string(image.height) +
-                    ", stride " + std::to_string(image.stride) + ")");
+                    std::to_string(image.width) + "x" + std::to_string(image.height) + ", stride " +
+                    std::to_string(image.stride) + ")");
     if (!configured_) return fail("set_image before configure");
     if (!make_current()) return false;
     GLint max_size = 0;
@@ -349,8 +354,8 @@ bool GlesRenderer::set_image(int id, const hal::ImageView& image) {
     if (tex == 0) glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, image.width, image.height, 0, GL_RGBA,
-                 GL_UNSIGNED_BYTE, pixels);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                 pixels);
     for (GLenum p : {GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MAG_FILTER})
         glTexParameteri(GL_TEXTURE_2D, p, GL_LINEAR);
     for (GLenum p : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T})
@@ -361,7 +366,8 @@ bool GlesRenderer::set_image(int id, const hal::ImageView& image) {
     return true;
 }
 
-void GlesRenderer::draw_dirty(const hal::OverlayScene& scene, const std::array<bool, SceneBatch::kMaxRegions>& redraw) {
+void GlesRenderer::draw_dirty(const hal::OverlayScene& scene,
+                              const std::array<bool, SceneBatch::kMaxRegions>& redraw) {
     batch_.select(redraw);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glViewport(0, 0, width_, height_);
@@ -402,7 +408,8 @@ void GlesRenderer::draw_dirty(const hal::OverlayScene& scene, const std::array<b
     }
     const std::size_t shapes = batch_.shape_range[kListCount];
     auto shape_list = [&](DrawList list, unsigned program) {
-        const std::size_t first = batch_.shape_range[list], n = batch_.shape_range[list + 1] - first;
+        const std::size_t first = batch_.shape_range[list],
+                          n = batch_.shape_range[list + 1] - first;
         if (n == 0) return;
         glUseProgram(program);
         glBindBuffer(GL_ARRAY_BUFFER, shape_vbo_);
@@ -436,7 +443,8 @@ void GlesRenderer::draw_dirty(const hal::OverlayScene& scene, const std::array<b
                         static_cast<GLsizeiptr>(batch_.draw_images_used * sizeof(TexVertex)),
                         batch_.draw_images.data());
         for (std::size_t i = 0; i < batch_.draw_images_used / 6; ++i) {
-            glBindTexture(GL_TEXTURE_2D, images_[static_cast<std::size_t>(batch_.draw_image_ids[i])]);
+            glBindTexture(GL_TEXTURE_2D,
+                          images_[static_cast<std::size_t>(batch_.draw_image_ids[i])]);
             glDrawArrays(GL_TRIANGLES, static_cast<GLint>(6 * i), 6);
         }
     }
@@ -504,13 +512,15 @@ bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLaye
     for (std::size_t i = 0; i < n; ++i)
         if (read[i]) {
             const hal::Rect& r = regions[i];
-            glReadPixels(r.x, r.y, r.width, r.height, GL_RGBA, GL_UNSIGNED_BYTE, &staging_[offset[i]]);
+            glReadPixels(r.x, r.y, r.width, r.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                         &staging_[offset[i]]);
         }
     // Any GL error before compositing: the target stays untouched.
     if (gl_failed("render")) return false;
     // Straight alpha once per read, not once per composite: kept regions are ready.
     for (std::size_t i = 0; i < n; ++i)
-        if (read[i]) unpremultiply(&staging_[offset[i]], static_cast<std::size_t>(area_of(regions[i])));
+        if (read[i])
+            unpremultiply(&staging_[offset[i]], static_cast<std::size_t>(area_of(regions[i])));
     for (std::size_t i = 0; i < n; ++i) {
         const hal::Rect& r = regions[i];
         // Outside the layer's rects its pixels are transparent (hal/overlay.hpp).

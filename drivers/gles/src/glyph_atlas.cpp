@@ -38,9 +38,12 @@ std::uint32_t next_code_point(const char* s, std::size_t& i) {
     }
     int extra = 0;
     std::uint32_t cp = 0;
-    if ((b0 & 0xE0) == 0xC0) extra = 1, cp = b0 & 0x1F;
-    else if ((b0 & 0xF0) == 0xE0) extra = 2, cp = b0 & 0x0F;
-    else if ((b0 & 0xF8) == 0xF0) extra = 3, cp = b0 & 0x07;
+    if ((b0 & 0xE0) == 0xC0)
+        extra = 1, cp = b0 & 0x1F;
+    else if ((b0 & 0xF0) == 0xE0)
+        extra = 2, cp = b0 & 0x0F;
+    else if ((b0 & 0xF8) == 0xF0)
+        extra = 3, cp = b0 & 0x07;
     else {
         ++i;
         return '?';
@@ -99,9 +102,10 @@ bool GlyphAtlas::build(const std::string& font_path, std::string& error) {
                 out.advance = static_cast<float>(g->advance.x) / 64.f;
                 if (pass == 1) {
                     for (int r = 0; r < h; ++r)
-                        std::memcpy(&pixels_[static_cast<std::size_t>(y + r) * width_ + x],
-                                    g->bitmap.buffer + static_cast<std::ptrdiff_t>(r) * g->bitmap.pitch,
-                                    static_cast<std::size_t>(w));
+                        std::memcpy(
+                            &pixels_[static_cast<std::size_t>(y + r) * width_ + x],
+                            g->bitmap.buffer + static_cast<std::ptrdiff_t>(r) * g->bitmap.pitch,
+                            static_cast<std::size_t>(w));
                     out.u0 = static_cast<float>(x) / width_;
                     out.u1 = static_cast<float>(x + w) / width_;
                     out.v0 = static_cast<float>(y) / height_;

@@ -13,9 +13,9 @@ namespace endotower::gles {
 
 struct Glyph {
     float u0 = 0, v0 = 0, u1 = 0, v1 = 0;  // in the atlas, 0..1
-    int width = 0, height = 0;               // bitmap pixels
-    int left = 0, top = 0;                   // bearing from the pen on the baseline (top up)
-    float advance = 0;                       // pixels
+    int width = 0, height = 0;             // bitmap pixels
+    int left = 0, top = 0;                 // bearing from the pen on the baseline (top up)
+    float advance = 0;                     // pixels
 };
 
 struct GlyphFace {

@@ -22,7 +22,9 @@ void set_colour(float* out, const hal::Rgba8& c) {
     out[0] = c.r / 255.f, out[1] = c.g / 255.f, out[2] = c.b / 255.f, out[3] = c.a / 255.f;
 }
 
-long long area(const hal::Rect& r) { return static_cast<long long>(r.width) * r.height; }
+long long area(const hal::Rect& r) {
+    return static_cast<long long>(r.width) * r.height;
+}
 
 hal::Rect unite(const hal::Rect& a, const hal::Rect& b) {
     const int x0 = std::min(a.x, b.x), y0 = std::min(a.y, b.y);
@@ -43,14 +45,21 @@ public:
 
     std::size_t used() const {
         switch (list) {
-            case kTexts: return b_.text_used;
-            case kImages: return b_.images_used;
-            case kBoxes: return b_.boxes_used;
-            default: return b_.shapes_used;
+            case kTexts:
+                return b_.text_used;
+            case kImages:
+                return b_.images_used;
+            case kBoxes:
+                return b_.boxes_used;
+            default:
+                return b_.shapes_used;
         }
     }
     // Ends the item opened by the last successful cover().
-    void close() { b_.items[b_.items_used - 1].count = static_cast<std::uint32_t>(used() - b_.items[b_.items_used - 1].first); }
+    void close() {
+        b_.items[b_.items_used - 1].count =
+            static_cast<std::uint32_t>(used() - b_.items[b_.items_used - 1].first);
+    }
 
     // Grows the bounds by one pixel for the antialiased edge, snaps them to whole
     // pixels and records the rect; false when nothing of it is on screen.
@@ -167,8 +176,10 @@ public:
         for (int k = 0; k < 8; ++k) {
             const hal::Vec3f p = to_camera(k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h, 1);
             hal::Vec2f uv;
-            if (project(cam, p, uv)) bounds.add(uv.x, uv.y);
-            else all_front = false;
+            if (project(cam, p, uv))
+                bounds.add(uv.x, uv.y);
+            else
+                all_front = false;
         }
         if (!all_front) bounds = {0, 0, static_cast<float>(w_), static_cast<float>(h_)};
         if (!cover(bounds)) return;
@@ -253,7 +264,8 @@ public:
         Bounds covered = bounds;
         if (!cover(covered)) return;
         // The id rides in the colour's second channel (the shader reads only the first).
-        const float colour[4] = {std::clamp(im.opacity, 0.f, 1.f), static_cast<float>(im.image_id), 0, 0};
+        const float colour[4] = {std::clamp(im.opacity, 0.f, 1.f), static_cast<float>(im.image_id),
+                                 0, 0};
         tex_quad(b_.images, b_.images_used, bounds.x0, bounds.y0, bounds.x1, bounds.y1, 0, 0, 1, 1,
                  colour);
         close();
@@ -337,8 +349,8 @@ void SceneBatch::reserve() {
     static const hal::OverlayScene kCapacities;  // only the list sizes are read
     const hal::OverlayScene* s = &kCapacities;
     const std::size_t line_segments = s->lines.items.size() * 64 + s->lines3.items.size() * 63;
-    const std::size_t shape_items = s->quads.items.size() + s->sectors.items.size() +
-                                    s->discs.items.size() + line_segments;
+    const std::size_t shape_items =
+        s->quads.items.size() + s->sectors.items.size() + s->discs.items.size() + line_segments;
     shapes.resize(6 * shape_items);
     text.resize(6 * s->texts.items.size() * sizeof(hal::SceneText::utf8));
     images.resize(6 * s->images.items.size());
@@ -406,7 +418,8 @@ void SceneBatch::build(const hal::OverlayScene& scene, const GlyphAtlas& atlas, 
     b.list = kLines;
     for (const hal::SceneLine& l : scene.lines) {
         const std::size_t n = std::min<std::size_t>(l.count, l.points.size());
-        for (std::size_t i = 1; i < n; ++i) b.segment(l.points[i - 1], l.points[i], l.width_px, l.colour);
+        for (std::size_t i = 1; i < n; ++i)
+            b.segment(l.points[i - 1], l.points[i], l.width_px, l.colour);
         if (l.closed && n >= 3) b.segment(l.points[n - 1], l.points[0], l.width_px, l.colour);
     }
     b.list = kDiscs;
@@ -440,7 +453,9 @@ void SceneBatch::build(const hal::OverlayScene& scene, const GlyphAtlas& atlas, 
         std::uint64_t& h = region_hash[item.region];
         h = hash_words(h, &item.list, 1) ^ item.list;
         switch (item.list) {
-            case kTexts: h = hash_words(h, &text[item.first], item.count * sizeof(TexVertex)); break;
+            case kTexts:
+                h = hash_words(h, &text[item.first], item.count * sizeof(TexVertex));
+                break;
             case kImages: {
                 const auto id = static_cast<std::size_t>(images[item.first].colour[1]);
                 h = hash_words(h, &images[item.first], item.count * sizeof(TexVertex));
@@ -451,7 +466,8 @@ void SceneBatch::build(const hal::OverlayScene& scene, const GlyphAtlas& atlas, 
                 h = hash_words(h, &boxes[item.first], item.count * sizeof(BoxVertex));
                 h = hash_words(h, clip.data(), sizeof clip);
                 break;
-            default: h = hash_words(h, &shapes[item.first], item.count * sizeof(ShapeVertex));
+            default:
+                h = hash_words(h, &shapes[item.first], item.count * sizeof(ShapeVertex));
         }
     }
 }
@@ -469,7 +485,8 @@ void SceneBatch::select(const std::array<bool, kMaxRegions>& redraw) {
                 draw_text_used += item.count;
                 break;
             case kImages:
-                draw_image_ids[draw_images_used / 6] = static_cast<int>(images[item.first].colour[1]);
+                draw_image_ids[draw_images_used / 6] =
+                    static_cast<int>(images[item.first].colour[1]);
                 std::copy_n(&images[item.first], item.count, &draw_images[draw_images_used]);
                 draw_images_used += item.count;
                 break;
@@ -484,7 +501,8 @@ void SceneBatch::select(const std::array<bool, kMaxRegions>& redraw) {
         }
     }
     shape_range[0] = 0;
-    for (std::size_t l = 0; l < kListCount; ++l) shape_range[l + 1] = shape_range[l] + shape_count[l];
+    for (std::size_t l = 0; l < kListCount; ++l)
+        shape_range[l + 1] = shape_range[l] + shape_count[l];
 }
 
 }  // namespace endotower::gles

@@ -56,7 +56,17 @@ private:
 std::array<float, 16> clip_from_camera(const hal::SceneCamera& camera, int width, int height);
 
 // The draw lists in scene order; each shape list has its own GL program.
-enum DrawList : std::uint8_t { kLines3, kImages, kSectors, kQuads, kLines, kDiscs, kTexts, kBoxes, kListCount };
+enum DrawList : std::uint8_t {
+    kLines3,
+    kImages,
+    kSectors,
+    kQuads,
+    kLines,
+    kDiscs,
+    kTexts,
+    kBoxes,
+    kListCount
+};
 
 // One item: its vertices in its list's array and the screen rect it may touch.
 struct BatchItem {

@@ -44,7 +44,8 @@ struct Target {
         return &px[static_cast<std::size_t>(y) * layer.stride + 4 * static_cast<std::size_t>(x)];
     }
     void set(int x, int y, Rgba8 c) {
-        std::uint8_t* p = &px[static_cast<std::size_t>(y) * layer.stride + 4 * static_cast<std::size_t>(x)];
+        std::uint8_t* p =
+            &px[static_cast<std::size_t>(y) * layer.stride + 4 * static_cast<std::size_t>(x)];
         p[0] = c.r, p[1] = c.g, p[2] = c.b, p[3] = c.a;
     }
     Rgba8 get(int x, int y) const {
@@ -97,7 +98,8 @@ protected:
                 if (!inside(drawn_, x, y))
                     for (int c = 0; c < 4; ++c)
                         if (after.at(x, y)[c] != before.at(x, y)[c]) {
-                            ADD_FAILURE() << "pixel (" << x << ", " << y << ") changed outside the rects";
+                            ADD_FAILURE()
+                                << "pixel (" << x << ", " << y << ") changed outside the rects";
                             return after;
                         }
         // Row padding is never written.
@@ -129,8 +131,10 @@ TEST_F(GlesRendererTest, OpaqueQuadIsExactAndOnlyIt) {
     for (int y = 0; y < kH; ++y)
         for (int x = 0; x < kW; ++x) {
             const bool in = x >= 40 && x < 140 && y >= 30 && y < 80;
-            if (in) ASSERT_EQ(after.get(x, y), (Rgba8{200, 100, 50, 255})) << x << ", " << y;
-            else ASSERT_EQ(after.get(x, y), t.get(x, y)) << x << ", " << y;
+            if (in)
+                ASSERT_EQ(after.get(x, y), (Rgba8{200, 100, 50, 255})) << x << ", " << y;
+            else
+                ASSERT_EQ(after.get(x, y), t.get(x, y)) << x << ", " << y;
         }
     ASSERT_EQ(drawn_.count, 1u);
     EXPECT_EQ(drawn_.rects[0], (hal::Rect{39, 29, 102, 52}));  // the 1-pixel antialiasing margin
@@ -188,13 +192,19 @@ TEST_F(GlesRendererTest, RoundedCornersAndBorder) {
     Target t;  // transparent
     hal::OverlayScene scene;
     const Rgba8 fill{0, 0, 255, 255}, border{255, 255, 0, 255};
-    scene.quads.add({.x = 20, .y = 20, .width = 100, .height = 60, .corner_px = 15,
-                     .border_px = 4, .fill = fill, .border = border});
+    scene.quads.add({.x = 20,
+                     .y = 20,
+                     .width = 100,
+                     .height = 60,
+                     .corner_px = 15,
+                     .border_px = 4,
+                     .fill = fill,
+                     .border = border});
     const Target after = render(scene, t);
     EXPECT_EQ(after.get(70, 50), fill);    // the middle
     EXPECT_EQ(after.get(70, 21), border);  // inside the 4-pixel top border
     EXPECT_EQ(after.get(21, 50), border);
-    EXPECT_EQ(after.get(70, 25), fill);  // just below it
+    EXPECT_EQ(after.get(70, 25), fill);       // just below it
     EXPECT_EQ(after.get(20, 20), (Rgba8{}));  // cut off by the 15-pixel corner
     EXPECT_EQ(after.get(23, 23), (Rgba8{}));
     EXPECT_EQ(after.get(119, 79), (Rgba8{}));
@@ -205,20 +215,25 @@ TEST_F(GlesRendererTest, SectorsDiscsAndArcs) {
     hal::OverlayScene scene;
     const Rgba8 red{255, 0, 0, 255}, green{0, 255, 0, 255};
     // A ring-menu item from 0 deg (+x) clockwise to 90 deg (+y, down on screen).
-    scene.sectors.add({.cx = 80, .cy = 80, .r_inner = 30, .r_outer = 60, .start_deg = 0,
-                       .end_deg = 90, .fill = red});
+    scene.sectors.add({.cx = 80,
+                       .cy = 80,
+                       .r_inner = 30,
+                       .r_outer = 60,
+                       .start_deg = 0,
+                       .end_deg = 90,
+                       .fill = red});
     // A dwell-progress arc of a quarter: 12 o'clock clockwise to 3 o'clock.
-    scene.discs.add({.cx = 240, .cy = 120, .r_inner = 20, .r_outer = 40, .sweep_deg = 90,
-                     .colour = green});
+    scene.discs.add(
+        {.cx = 240, .cy = 120, .r_inner = 20, .r_outer = 40, .sweep_deg = 90, .colour = green});
     const Target after = render(scene, t);
     const float d45 = 45 * 3.14159265f / 180;
     EXPECT_EQ(after.get(80 + int(45 * std::cos(d45)), 80 + int(45 * std::sin(d45))), red);
-    EXPECT_EQ(after.get(80 + 45, 80 - 10), (Rgba8{}));  // before 0 deg (above the +x axis)
-    EXPECT_EQ(after.get(80 - 10, 80 + 45), (Rgba8{}));  // past 90 deg
-    EXPECT_EQ(after.get(80 + 10, 80 + 10), (Rgba8{}));  // inside r_inner
-    EXPECT_EQ(after.get(240 + 21, 120 - 21), green);    // 1:30
+    EXPECT_EQ(after.get(80 + 45, 80 - 10), (Rgba8{}));    // before 0 deg (above the +x axis)
+    EXPECT_EQ(after.get(80 - 10, 80 + 45), (Rgba8{}));    // past 90 deg
+    EXPECT_EQ(after.get(80 + 10, 80 + 10), (Rgba8{}));    // inside r_inner
+    EXPECT_EQ(after.get(240 + 21, 120 - 21), green);      // 1:30
     EXPECT_EQ(after.get(240 - 21, 120 + 21), (Rgba8{}));  // 7:30, not swept yet
-    EXPECT_EQ(after.get(240, 120), (Rgba8{}));          // the hole
+    EXPECT_EQ(after.get(240, 120), (Rgba8{}));            // the hole
 }
 
 TEST_F(GlesRendererTest, PolylineCoversItsWidth) {
@@ -262,9 +277,9 @@ TEST_F(GlesRendererTest, TextDrawsGlyphsInsideItsBox) {
     EXPECT_LE(x_min, 33);
     EXPECT_GT(x_max, 30 + 13 * 8);  // about 13 advances of 8..15 pixels
     EXPECT_LT(x_max, 30 + 14 * 15);
-    EXPECT_GE(y_min, 40);   // the line box is [40, 64)
+    EXPECT_GE(y_min, 40);  // the line box is [40, 64)
     EXPECT_LE(y_max, 64);
-    EXPECT_LE(y_min, 45);   // the capitals reach near the top of it
+    EXPECT_LE(y_min, 45);  // the capitals reach near the top of it
     // Centred text sits around its anchor.
     hal::OverlayScene centred;
     text.align = hal::SceneText::Align::kCentre;
@@ -282,7 +297,8 @@ TEST_F(GlesRendererTest, TextDrawsGlyphsInsideItsBox) {
 
 TEST_F(GlesRendererTest, ImageIsScaledIntoItsRectangle) {
     // 2 x 2 texels scaled to 20 x 20: pixels near the corners sample one texel only.
-    const std::uint8_t px[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255};
+    const std::uint8_t px[16] = {255, 0, 0,   255, 0,   255, 0,   255,
+                                 0,   0, 255, 255, 255, 255, 255, 255};
     ASSERT_TRUE(renderer_->set_image(3, {2, 2, 8, px})) << renderer_->error();
     Target t;
     t.pattern();
@@ -311,7 +327,8 @@ TEST_F(GlesRendererTest, CubeMatchesThePinholeWithinOnePixel) {
     hal::SceneBox box;
     box.size_mm = 40;
     for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k) box.camera_from_model[static_cast<std::size_t>(4 * c + k)] = float(r(k, c));
+        for (int k = 0; k < 3; ++k)
+            box.camera_from_model[static_cast<std::size_t>(4 * c + k)] = float(r(k, c));
     box.camera_from_model[12] = 10, box.camera_from_model[13] = -5, box.camera_from_model[14] = 120;
     box.camera_from_model[15] = 1;
     box.faces.fill({200, 60, 60, 255});
@@ -319,7 +336,8 @@ TEST_F(GlesRendererTest, CubeMatchesThePinholeWithinOnePixel) {
     const Target after = render(scene, t);
 
     std::vector<cv::Point3d> corners;
-    for (int k = 0; k < 8; ++k) corners.emplace_back(k & 1 ? 20 : -20, k & 2 ? 20 : -20, k & 4 ? 20 : -20);
+    for (int k = 0; k < 8; ++k)
+        corners.emplace_back(k & 1 ? 20 : -20, k & 2 ? 20 : -20, k & 4 ? 20 : -20);
     std::vector<cv::Point2d> uv;
     const cv::Matx33d K(300, 0, 157.3, 0, 310, 121.8, 0, 0, 1);
     cv::projectPoints(corners, rvec, tvec, K, cv::noArray(), uv);
@@ -339,7 +357,8 @@ TEST_F(GlesRendererTest, CubeMatchesThePinholeWithinOnePixel) {
     EXPECT_NEAR(y_min, v_min, 1.0);
     EXPECT_NEAR(y_max, v_max, 1.0);
     // Shaded by the headlight: never brighter than the face colour, never black.
-    const Rgba8 centre = after.get(int(std::lround((u_min + u_max) / 2)), int(std::lround((v_min + v_max) / 2)));
+    const Rgba8 centre =
+        after.get(int(std::lround((u_min + u_max) / 2)), int(std::lround((v_min + v_max) / 2)));
     EXPECT_EQ(centre.a, 255);
     EXPECT_LE(centre.r, 200);
     EXPECT_GE(centre.r, 70);
@@ -389,8 +408,14 @@ TEST_F(GlesRendererTest, FullMenuRectsCoverEveryChangedPixel) {
     scene.camera = {.fx = 300, .fy = 300, .cx = 159.5, .cy = 119.5};
     for (int i = 0; i < 12; ++i) {
         const float x = 5 + float(i % 4) * 78, y = 5 + float(i / 4) * 40;
-        scene.quads.add({.x = x, .y = y, .width = 70, .height = 32, .corner_px = 6, .border_px = 2,
-                         .fill = {40, 40, 40, 160}, .border = {255, 255, 255, 220}});
+        scene.quads.add({.x = x,
+                         .y = y,
+                         .width = 70,
+                         .height = 32,
+                         .corner_px = 6,
+                         .border_px = 2,
+                         .fill = {40, 40, 40, 160},
+                         .border = {255, 255, 255, 220}});
         hal::SceneText text;
         std::snprintf(text.utf8.data(), text.utf8.size(), "Item %d", i);
         text.x = x + 35, text.y = y + 16, text.size_px = 18;
@@ -399,9 +424,15 @@ TEST_F(GlesRendererTest, FullMenuRectsCoverEveryChangedPixel) {
         scene.texts.add(text);
     }
     for (int i = 0; i < 6; ++i)
-        scene.sectors.add({.cx = 240, .cy = 180, .r_inner = 25, .r_outer = 55,
-                           .start_deg = float(i * 60), .end_deg = float(i * 60 + 55),
-                           .border_px = 1, .fill = {0, 120, 255, 150}, .border = {255, 255, 255, 255}});
+        scene.sectors.add({.cx = 240,
+                           .cy = 180,
+                           .r_inner = 25,
+                           .r_outer = 55,
+                           .start_deg = float(i * 60),
+                           .end_deg = float(i * 60 + 55),
+                           .border_px = 1,
+                           .fill = {0, 120, 255, 150},
+                           .border = {255, 255, 255, 255}});
     scene.discs.add({.cx = 100, .cy = 200, .r_outer = 6, .colour = {255, 255, 0, 255}});
     hal::SceneBox box;
     box.camera_from_model = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -40, 40, 150, 1};
@@ -420,14 +451,19 @@ TEST_F(GlesRendererTest, ReusedRegionsEqualAFreshRender) {
     std::string error;
     auto fresh = create_gles_renderer(error);
     ASSERT_TRUE(fresh && fresh->configure(kW, kH)) << error;
-    const std::uint8_t px[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128};
+    const std::uint8_t px[16] = {255, 0, 0,   255, 0,   255, 0,   255,
+                                 0,   0, 255, 255, 255, 255, 255, 128};
     const std::uint8_t px2[16] = {9, 9, 9, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128};
     ASSERT_TRUE(renderer_->set_image(0, {2, 2, 8, px}));
     ASSERT_TRUE(fresh->set_image(0, {2, 2, 8, px2}));
     hal::OverlayScene menu;
     menu.camera = {.fx = 300, .fy = 300, .cx = 159.5, .cy = 119.5};
     for (int i = 0; i < 6; ++i)
-        menu.quads.add({.x = 10.f + 50 * i, .y = 10, .width = 40, .height = 30, .corner_px = 5,
+        menu.quads.add({.x = 10.f + 50 * i,
+                        .y = 10,
+                        .width = 40,
+                        .height = 30,
+                        .corner_px = 5,
                         .fill = {40, 80, 200, 150}});
     menu.images.add({.image_id = 0, .x = 200, .y = 150, .width = 60, .height = 60});
     hal::SceneBox box;

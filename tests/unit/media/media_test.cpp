@@ -43,7 +43,8 @@ protected:
         DcmDataset* ds = file.getDataset();
         char uid[100];
         ds->putAndInsertString(DCM_SOPClassUID, UID_SecondaryCaptureImageStorage);
-        ds->putAndInsertString(DCM_SOPInstanceUID, dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT));
+        ds->putAndInsertString(DCM_SOPInstanceUID,
+                               dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT));
         ds->putAndInsertString(DCM_PatientName, "Test^Patient");
         ds->putAndInsertUint16(DCM_Rows, 3);
         ds->putAndInsertUint16(DCM_Columns, 4);
@@ -66,7 +67,8 @@ protected:
         DcmDataset* ds = file.getDataset();
         char uid[100];
         ds->putAndInsertString(DCM_SOPClassUID, UID_SecondaryCaptureImageStorage);
-        ds->putAndInsertString(DCM_SOPInstanceUID, dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT));
+        ds->putAndInsertString(DCM_SOPInstanceUID,
+                               dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT));
         ds->putAndInsertUint16(DCM_Rows, 1);
         ds->putAndInsertUint16(DCM_Columns, 2);
         ds->putAndInsertUint16(DCM_SamplesPerPixel, 3);
@@ -91,7 +93,8 @@ double voi_linear(double x, double c, double w) {
 }
 
 TEST_F(MediaTest, DicomWindowFromTheFileToGrey) {
-    const std::vector<Uint16> v = {0, 100, 500, 900, 1000, 1040, 1100, 1200, 1500, 2000, 3000, 4095};
+    const std::vector<Uint16> v = {0,    100,  500,  900,  1000, 1040,
+                                   1100, 1200, 1500, 2000, 3000, 4095};
     write_dicom("ct.dcm", v, 1100, 400);
     MediaImage img;
     std::string error;
@@ -227,10 +230,11 @@ TEST_F(MediaTest, FolderLoadsImagesInNameOrderAndReportsProblems) {
 TEST(PatientRecord, ParsesTheDocumentedKeys) {
     PatientRecord r;
     std::string error;
-    ASSERT_TRUE(parse_patient_record("# record\nname: Anna Müller\nid:  0042-77 \n\n"
-                                     "birth_date: 1971-04-02\nprocedure: Cholecystectomy\n"
-                                     "notes: allergic to latex\nnotes: prior appendectomy\n",
-                                     "p.txt", r, error))
+    ASSERT_TRUE(
+        parse_patient_record("# record\nname: Anna Müller\nid:  0042-77 \n\n"
+                             "birth_date: 1971-04-02\nprocedure: Cholecystectomy\n"
+                             "notes: allergic to latex\nnotes: prior appendectomy\n",
+                             "p.txt", r, error))
         << error;
     EXPECT_EQ(r.name, "Anna Müller");
     EXPECT_EQ(r.id, "0042-77");
@@ -247,7 +251,8 @@ TEST(PatientRecord, ErrorsNameFileAndLine) {
     const Case cases[] = {
         {"name: A\nid: 1\nweight: 70\n", "p.txt:3: unknown key 'weight'"},
         {"name: A\nid 1\n", "p.txt:2: expected 'key: value'"},
-        {"name: A\nid: 1\nbirth_date: 02.04.1971\n", "p.txt:3: birth_date '02.04.1971' is not YYYY-MM-DD"},
+        {"name: A\nid: 1\nbirth_date: 02.04.1971\n",
+         "p.txt:3: birth_date '02.04.1971' is not YYYY-MM-DD"},
         {"name: A\nname: B\nid: 1\n", "p.txt:2: 'name' given twice"},
         {"name: A\n", "p.txt: missing id"},
         {"id: 1\n", "p.txt: missing name"},
@@ -260,8 +265,10 @@ TEST(PatientRecord, ErrorsNameFileAndLine) {
     }
     PatientRecord r;
     std::string error;
-    EXPECT_FALSE(parse_patient_record("name: " + std::string(300, 'a') + "\nid: 1\n", "p.txt", r, error));
-    EXPECT_NE(error.find("p.txt:1: value of 'name' longer than 200 bytes"), std::string::npos) << error;
+    EXPECT_FALSE(
+        parse_patient_record("name: " + std::string(300, 'a') + "\nid: 1\n", "p.txt", r, error));
+    EXPECT_NE(error.find("p.txt:1: value of 'name' longer than 200 bytes"), std::string::npos)
+        << error;
 }
 
 }  // namespace
