@@ -491,6 +491,25 @@ TEST_F(GlesRendererTest, ReusedRegionsEqualAFreshRender) {
     EXPECT_EQ(again.px, scratch.px);
 }
 
+// 48 separate buttons: the report merges them into the contract's 16 rects, which
+// still cover every changed pixel (checked in render()).
+TEST_F(GlesRendererTest, ManyItemsMergeIntoSixteenRects) {
+    Target t;
+    t.pattern();
+    hal::OverlayScene scene;
+    for (int i = 0; i < 48; ++i)
+        ASSERT_TRUE(scene.quads.add({.x = 4.f + 40 * float(i % 8),
+                                     .y = 4.f + 40 * float(i / 8),
+                                     .width = 30,
+                                     .height = 30,
+                                     .fill = {200, 10, 10, 255}}));
+    EXPECT_FALSE(scene.quads.add({}));  // past capacity
+    const Target after = render(scene, t);
+    EXPECT_EQ(drawn_.count, 16u);
+    for (int i = 0; i < 48; ++i)
+        EXPECT_EQ(after.get(5 + 40 * (i % 8), 5 + 40 * (i / 8)), (Rgba8{200, 10, 10, 255})) << i;
+}
+
 TEST_F(GlesRendererTest, WrongTargetSizeIsRefusedUntouched) {
     Target t;
     t.layer.width = kW - 1;
