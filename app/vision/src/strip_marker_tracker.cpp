@@ -1,0 +1,307 @@
+#include "endotower/vision/strip_marker_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace endotower::vision {
+
+namespace {
+
+constexpr int kMaxParts = 24;  // the largest tool parts considered (pairs: 276)
+
+struct Part {
+    int label = 0, area = 0;
+    double mean = 0;  // grey level
+    cv::Rect box;
+    std::vector<cv::Point> hull;
+};
+
+struct Strip {
+    int part_a = 0, part_b = 0;
+    Point2 a, b, c, d, e;
+    double diameter_px = 0;
+};
+
+// Where the line origin + t dir crosses the convex polygon: [t0, t1]; false if it misses.
+bool chord(const std::vector<cv::Point>& poly, Point2 o, Point2 dir, double& t0, double& t1) {
+    t0 = 1e300, t1 = -1e300;
+    const std::size_t n = poly.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        const cv::Point p = poly[i], q = poly[(i + 1) % n];
+        const double ex = q.x - p.x, ey = q.y - p.y;
+        const double den = dir.x * ey - dir.y * ex;
+        if (std::abs(den) < 1e-12) continue;
+        const double wx = p.x - o.x, wy = p.y - o.y;
+        const double t = (wx * ey - wy * ex) / den;        // along dir
+        const double s = (wx * dir.y - wy * dir.x) / den;  // along the edge
+        if (s < -1e-9 || s > 1 + 1e-9) continue;
+        t0 = std::min(t0, t), t1 = std::max(t1, t);
+    }
+    return t1 > t0;
+}
+
+}  // namespace
+
+struct StripMarkerTracker::Work {
+    cv::Mat gray, opened, local_max, local_min, bright, labels, stats, centroids, hull_mask;
+    cv::Mat thin_element, band_element, window_element;
+    std::vector<Part> parts;
+    std::vector<cv::Point> points, pair_hull;
+    std::vector<Strip> strips;
+    std::vector<int> group;
+};
+
+StripMarkerTracker::StripMarkerTracker(StripMarkerParams params) : params_(params) {}
+StripMarkerTracker::~StripMarkerTracker() = default;
+StripMarkerTracker::StripMarkerTracker(StripMarkerTracker&&) noexcept = default;
+
+void StripMarkerTracker::set_calibration(const calibration::SeparationTable& table,
+                                         const PinholeCamera& camera,
+                                         std::function<Point2(Point2)> undistort) {
+    table_ = table;
+    camera_ = camera;
+    undistort_ = std::move(undistort);
+}
+
+void StripMarkerTracker::configure(const hal::FrameFormat& format) {
+    work_ = std::make_unique<Work>();
+    Work& w = *work_;
+    const cv::Size size(format.width, format.height);
+    for (cv::Mat* m : {&w.gray, &w.opened, &w.local_max, &w.local_min, &w.bright, &w.hull_mask})
+        m->create(size, CV_8UC1);
+    w.labels.create(size, CV_32S);
+    w.hull_mask.setTo(0);
+    const auto odd = [](double v) { return std::max(3, static_cast<int>(std::lround(v)) | 1); };
+    const int band = odd(params_.min_band_fraction * format.height);
+    const int window = odd(params_.window_fraction * format.height);
+    w.thin_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(band, band));
+    w.band_element = w.thin_element;
+    w.window_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(window, window));
+    w.parts.resize(kMaxParts);
+    for (Part& p : w.parts) p.hull.reserve(256);
+    w.points.reserve(4096);
+    w.pair_hull.reserve(512);
+    w.strips.reserve(kMaxParts * 2);
+    w.group.resize(kMaxParts);
+}
+
+void StripMarkerTracker::locate(StripMarker& m) const {
+    m.located = false;
+    if (!undistort_ || table_.distances_mm.size() < 2 || !(params_.diameter_mm > 0)) return;
+    // M across the axis, both ends undistorted: the table holds undistorted separations.
+    const double len = std::hypot(m.b.x - m.a.x, m.b.y - m.a.y);
+    if (!(len > 0)) return;
+    const Point2 across{(m.b.x - m.a.x) / len, (m.b.y - m.a.y) / len};
+    const double h = m.diameter_px / 2;
+    const Point2 p = undistort_({m.e.x - h * across.x, m.e.y - h * across.y});
+    const Point2 q = undistort_({m.e.x + h * across.x, m.e.y + h * across.y});
+    const Point2 e = undistort_(m.e);
+    const double diameter = std::hypot(q.x - p.x, q.y - p.y);
+    if (!(diameter > 0)) return;
+    // The tool's diameter D shows as many pixels as a separation of marker_mm * M / D.
+    m.depth_mm = table_.depth_for_separation(table_.marker_mm * diameter / params_.diameter_mm);
+    m.depth_pinhole_mm = camera_.fx * params_.diameter_mm / diameter;
+    if (!(m.depth_mm > 0)) return;
+    m.e_mm = {table_.to_mm(e.x, camera_.cx, m.depth_mm), table_.to_mm(e.y, camera_.cy, m.depth_mm),
+              m.depth_mm};
+    m.located = true;
+}
+
+std::size_t StripMarkerTracker::track(const hal::Frame& frame,
+                                      std::span<StripMarker, kMaxMarkers> out) {
+    if (!work_ || !frame.data) return 0;
+    Work& w = *work_;
+    const hal::FrameFormat& f = frame.format;
+    if (f.width != w.gray.cols || f.height != w.gray.rows) return 0;
+    if (f.pixel_format == hal::PixelFormat::kBgr24) {
+        const cv::Mat bgr(f.height, f.width, CV_8UC3, frame.data,
+                          static_cast<std::size_t>(f.stride));
+        cv::cvtColor(bgr, w.gray, cv::COLOR_BGR2GRAY);
+    } else if (f.pixel_format == hal::PixelFormat::kGray8) {
+        cv::Mat(f.height, f.width, CV_8UC1, frame.data, static_cast<std::size_t>(f.stride))
+            .copyTo(w.gray);
+    } else {
+        return 0;
+    }
+
+    // 1. Tool parts. Thin bright lines (grid, vessels' glints) must not set the local
+    // tool brightness, so L is taken after a grey opening that removes them.
+    cv::morphologyEx(w.gray, w.opened, cv::MORPH_OPEN, w.thin_element);
+    cv::dilate(w.opened, w.local_max, w.window_element);
+    cv::erode(w.gray, w.local_min, w.window_element);
+    const int rows = f.height, cols = f.width;
+    for (int y = 0; y < rows; ++y) {
+        const std::uint8_t* o = w.opened.ptr<std::uint8_t>(y);
+        const std::uint8_t* hi = w.local_max.ptr<std::uint8_t>(y);
+        const std::uint8_t* lo = w.local_min.ptr<std::uint8_t>(y);
+        std::uint8_t* b = w.bright.ptr<std::uint8_t>(y);
+        for (int x = 0; x < cols; ++x)
+            b[x] = (hi[x] - lo[x] >= params_.min_contrast && lo[x] >= params_.min_level &&
+                    o[x] >= lo[x] + params_.bright_ratio * (hi[x] - lo[x]))
+                       ? 255
+                       : 0;
+    }
+    cv::morphologyEx(w.bright, w.bright, cv::MORPH_OPEN, w.band_element);
+    const int n =
+        cv::connectedComponentsWithStats(w.bright, w.labels, w.stats, w.centroids, 8, CV_32S);
+    const int band = w.band_element.rows;
+    std::size_t nparts = 0;
+    {
+        // The largest parts first.
+        w.points.clear();
+        for (int i = 1; i < n; ++i)
+            if (w.stats.at<int>(i, cv::CC_STAT_AREA) >= band * band)
+                w.points.push_back({w.stats.at<int>(i, cv::CC_STAT_AREA), i});
+        std::sort(w.points.begin(), w.points.end(),
+                  [](cv::Point a, cv::Point b) { return a.x > b.x; });
+        nparts = std::min<std::size_t>(w.points.size(), kMaxParts);
+        for (std::size_t k = 0; k < nparts; ++k) {
+            Part& p = w.parts[k];
+            p.label = w.points[k].y;
+            p.area = w.points[k].x;
+            p.box = {w.stats.at<int>(p.label, cv::CC_STAT_LEFT),
+                     w.stats.at<int>(p.label, cv::CC_STAT_TOP),
+                     w.stats.at<int>(p.label, cv::CC_STAT_WIDTH),
+                     w.stats.at<int>(p.label, cv::CC_STAT_HEIGHT)};
+        }
+        for (std::size_t k = 0; k < nparts; ++k) {
+            Part& p = w.parts[k];
+            w.points.clear();
+            double sum = 0;
+            // Boundary pixels are enough for the hull.
+            for (int y = p.box.y; y < p.box.y + p.box.height; ++y) {
+                const int* l = w.labels.ptr<int>(y);
+                const int* up = y > 0 ? w.labels.ptr<int>(y - 1) : nullptr;
+                const int* dn = y + 1 < rows ? w.labels.ptr<int>(y + 1) : nullptr;
+                for (int x = p.box.x; x < p.box.x + p.box.width; ++x) {
+                    if (l[x] != p.label) continue;
+                    sum += w.gray.ptr<std::uint8_t>(y)[x];
+                    if (!up || !dn || x == 0 || x + 1 == cols || up[x] != p.label ||
+                        dn[x] != p.label || l[x - 1] != p.label || l[x + 1] != p.label)
+                        w.points.push_back({x, y});
+                }
+            }
+            cv::convexHull(w.points, p.hull);
+            p.mean = sum / p.area;
+        }
+        // A wide uniform part shows no contrast inside: its hull is the part.
+        for (std::size_t k = 0; k < nparts; ++k)
+            cv::fillConvexPoly(w.labels, w.parts[k].hull, cv::Scalar(w.parts[k].label));
+    }
+
+    // 2. Strips: the dark gap between two parts.
+    w.strips.clear();
+    const int window = w.window_element.rows;
+    for (std::size_t i = 0; i < nparts; ++i) {
+        for (std::size_t j = i + 1; j < nparts; ++j) {
+            const Part &pi = w.parts[i], &pj = w.parts[j];
+            const int gx = std::max(
+                {0, pj.box.x - (pi.box.x + pi.box.width), pi.box.x - (pj.box.x + pj.box.width)});
+            const int gy = std::max(
+                {0, pj.box.y - (pi.box.y + pi.box.height), pi.box.y - (pj.box.y + pj.box.height)});
+            if (std::max(gx, gy) > window) continue;
+            w.points.assign(pi.hull.begin(), pi.hull.end());
+            w.points.insert(w.points.end(), pj.hull.begin(), pj.hull.end());
+            cv::convexHull(w.points, w.pair_hull);
+            const cv::Rect box = cv::boundingRect(w.pair_hull) & cv::Rect(0, 0, cols, rows);
+            cv::Mat roi = w.hull_mask(box);
+            cv::fillConvexPoly(w.hull_mask, w.pair_hull, 255);
+            long between = 0, dark = 0, foreign = 0;
+            double sx = 0, sy = 0, level = 0;
+            for (int y = box.y; y < box.y + box.height; ++y) {
+                const std::uint8_t* h = w.hull_mask.ptr<std::uint8_t>(y);
+                const int* l = w.labels.ptr<int>(y);
+                const std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
+                const std::uint8_t* hi = w.local_max.ptr<std::uint8_t>(y);
+                for (int x = box.x; x < box.x + box.width; ++x) {
+                    if (!h[x]) continue;
+                    if (l[x] == pi.label || l[x] == pj.label) continue;
+                    if (l[x] != 0) {
+                        ++foreign;
+                        continue;
+                    }
+                    ++between;
+                    sx += x, sy += y;
+                    level += g[x];
+                    if (g[x] < params_.dark_ratio * hi[x]) ++dark;
+                }
+            }
+            roi.setTo(0);
+            const double smaller = std::min(pi.area, pj.area);
+            if (between < std::max<double>(band * band, 0.1 * smaller) || between > 3 * smaller)
+                continue;
+            if (dark < params_.dark_fill * between || foreign > 0.05 * between) continue;
+            // Black paint: much darker than the metal on both sides, not a shading dip.
+            if (level / between > params_.dark_ratio * std::min(pi.mean, pj.mean)) continue;
+
+            // 3. Blob analysis: E, the axis from part to part, the trapezoid.
+            Strip s;
+            s.part_a = static_cast<int>(i), s.part_b = static_cast<int>(j);
+            s.e = {sx / between, sy / between};
+            const double ux =
+                w.centroids.at<double>(pj.label, 0) - w.centroids.at<double>(pi.label, 0);
+            const double uy =
+                w.centroids.at<double>(pj.label, 1) - w.centroids.at<double>(pi.label, 1);
+            const double ul = std::hypot(ux, uy);
+            if (!(ul > 0)) continue;
+            const Point2 u{ux / ul, uy / ul}, v{-u.y, u.x};
+            double t0, t1;
+            if (!chord(w.pair_hull, s.e, v, t0, t1)) continue;
+            s.diameter_px = t1 - t0;
+            // The strip's extent along u: where the parts' hulls end towards E.
+            double a0, a1, b0, b1;
+            const bool ha = chord(pi.hull, s.e, u, a0, a1), hb = chord(pj.hull, s.e, u, b0, b1);
+            const double lo = ha ? a1 : -0.25 * s.diameter_px, hi = hb ? b0 : 0.25 * s.diameter_px;
+            if (!(hi > lo)) continue;
+            // The strip is as wide as the tool: the parts' widths across u agree with M.
+            double c0, c1, d0, d1;
+            const Point2 pa{s.e.x + lo * u.x, s.e.y + lo * u.y},
+                pb{s.e.x + hi * u.x, s.e.y + hi * u.y};
+            if (!chord(w.pair_hull, pa, v, c0, c1) || !chord(w.pair_hull, pb, v, d0, d1)) continue;
+            s.a = {pa.x + c0 * v.x, pa.y + c0 * v.y};
+            s.b = {pa.x + c1 * v.x, pa.y + c1 * v.y};
+            s.c = {pb.x + d1 * v.x, pb.y + d1 * v.y};
+            s.d = {pb.x + d0 * v.x, pb.y + d0 * v.y};
+            if (s.diameter_px < band || (hi - lo) > 3 * s.diameter_px) continue;
+            w.strips.push_back(s);
+        }
+    }
+
+    // 4. Strips sharing a part are one tool's; per tool the smallest M is nearest the tip.
+    for (std::size_t k = 0; k < nparts; ++k) w.group[k] = static_cast<int>(k);
+    const auto root = [&](int k) {
+        while (w.group[k] != k) k = w.group[k] = w.group[w.group[k]];
+        return k;
+    };
+    for (const Strip& s : w.strips) w.group[root(s.part_a)] = root(s.part_b);
+    std::size_t found = 0;
+    std::array<int, kMaxMarkers> roots{};
+    for (std::size_t k = 0; k < w.strips.size() && found < out.size(); ++k) {
+        const int r = root(w.strips[k].part_a);
+        bool seen = false;
+        for (std::size_t m = 0; m < found; ++m) seen = seen || roots[m] == r;
+        if (seen) continue;
+        const Strip* best = nullptr;
+        int count = 0;
+        for (const Strip& s : w.strips) {
+            if (root(s.part_a) != r) continue;
+            ++count;
+            if (!best || s.diameter_px < best->diameter_px) best = &s;
+        }
+        StripMarker& m = out[found];
+        m = {};
+        m.a = best->a, m.b = best->b, m.c = best->c, m.d = best->d, m.e = best->e;
+        m.diameter_px = best->diameter_px;
+        m.strips = count;
+        locate(m);
+        roots[found++] = r;
+    }
+    // Most strips first: the likeliest marker.
+    std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(found),
+              [](const StripMarker& a, const StripMarker& b) { return a.strips > b.strips; });
+    return found;
+}
+
+}  // namespace endotower::vision
