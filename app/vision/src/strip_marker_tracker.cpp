@@ -45,7 +45,7 @@ bool chord(const std::vector<cv::Point>& poly, Point2 o, Point2 dir, double& t0,
 }  // namespace
 
 struct StripMarkerTracker::Work {
-    cv::Mat gray, opened, local_max, local_min, bright, labels, stats, centroids, hull_mask;
+    cv::Mat gray, opened, local_max, bright, labels, stats, centroids, hull_mask;
     cv::Mat thin_element, band_element, window_element;
     std::vector<Part> parts;
     std::vector<cv::Point> points, pair_hull;
@@ -69,7 +69,7 @@ void StripMarkerTracker::configure(const hal::FrameFormat& format) {
     work_ = std::make_unique<Work>();
     Work& w = *work_;
     const cv::Size size(format.width, format.height);
-    for (cv::Mat* m : {&w.gray, &w.opened, &w.local_max, &w.local_min, &w.bright, &w.hull_mask})
+    for (cv::Mat* m : {&w.gray, &w.opened, &w.local_max, &w.bright, &w.hull_mask})
         m->create(size, CV_8UC1);
     w.labels.create(size, CV_32S);
     w.hull_mask.setTo(0);
@@ -78,6 +78,8 @@ void StripMarkerTracker::configure(const hal::FrameFormat& format) {
     const int window = odd(params_.window_fraction * format.height);
     w.thin_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(band, band));
     w.band_element = w.thin_element;
+    w.near_element =
+        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * band + 1, 2 * band + 1));
     w.window_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(window, window));
     w.parts.resize(kMaxParts);
     for (Part& p : w.parts) p.hull.reserve(256);
@@ -126,23 +128,27 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
         return 0;
     }
 
-    // 1. Tool parts. Thin bright lines (grid, vessels' glints) must not set the local
-    // tool brightness, so L is taken after a grey opening that removes them.
+    // 1. Tool parts: brighter than the background (the book's black paper, lit
+    // tissue farther from the light than the tool). Thin bright lines (the grid,
+    // glints) are removed first by a grey opening. The background level is the median
+    // of the lit picture (the tool covers the smaller part of it).
     cv::morphologyEx(w.gray, w.opened, cv::MORPH_OPEN, w.thin_element);
     cv::dilate(w.opened, w.local_max, w.window_element);
-    cv::erode(w.gray, w.local_min, w.window_element);
     const int rows = f.height, cols = f.width;
-    for (int y = 0; y < rows; ++y) {
+    std::array<int, 256> hist{};
+    long lit = 0;
+    for (int y = 0; y < rows; y += 2) {
         const std::uint8_t* o = w.opened.ptr<std::uint8_t>(y);
-        const std::uint8_t* hi = w.local_max.ptr<std::uint8_t>(y);
-        const std::uint8_t* lo = w.local_min.ptr<std::uint8_t>(y);
-        std::uint8_t* b = w.bright.ptr<std::uint8_t>(y);
-        for (int x = 0; x < cols; ++x)
-            b[x] = (hi[x] - lo[x] >= params_.min_contrast && lo[x] >= params_.min_level &&
-                    o[x] >= lo[x] + params_.bright_ratio * (hi[x] - lo[x]))
-                       ? 255
-                       : 0;
+        for (int x = 0; x < cols; x += 2)
+            if (o[x] >= params_.min_level) ++hist[o[x]], ++lit;
     }
+    if (lit == 0) return 0;
+    int median = 0;
+    for (long acc = 0; median < 255 && (acc += hist[median]) < lit / 2;) ++median;
+    const double level =
+        std::max(median + 0.5 * params_.min_contrast, median * (1 + params_.bright_margin));
+    if (level >= 255) return 0;
+    cv::threshold(w.opened, w.bright, level, 255, cv::THRESH_BINARY);
     cv::morphologyEx(w.bright, w.bright, cv::MORPH_OPEN, w.band_element);
     const int n =
         cv::connectedComponentsWithStats(w.bright, w.labels, w.stats, w.centroids, 8, CV_32S);
@@ -264,6 +270,9 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
             s.b = {pa.x + c1 * v.x, pa.y + c1 * v.y};
             s.c = {pb.x + d1 * v.x, pb.y + d1 * v.y};
             s.d = {pb.x + d0 * v.x, pb.y + d0 * v.y};
+            // A shaded or partly hidden part only ever loses pixels to the threshold: M is
+            // the larger of the chord through E and the mean of AB and CD.
+            s.diameter_px = std::max(s.diameter_px, 0.5 * ((c1 - c0) + (d1 - d0)));
             if (s.diameter_px < band || (hi - lo) > 3 * s.diameter_px) continue;
             w.strips.push_back(s);
         }
@@ -283,12 +292,26 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
         bool seen = false;
         for (std::size_t m = 0; m < found; ++m) seen = seen || roots[m] == r;
         if (seen) continue;
+        // The nearest strip to the tip is the one farthest from the shaft (the tool's
+        // largest part, which runs out of the picture); the book's smallest M decides
+        // when the largest part is ambiguous (one strip between two parts).
+        int shaft = -1;
+        for (std::size_t k = 0; k < nparts; ++k)
+            if (root(static_cast<int>(k)) == r &&
+                (shaft < 0 || w.parts[k].area > w.parts[shaft].area))
+                shaft = static_cast<int>(k);
+        const double sx = w.centroids.at<double>(w.parts[shaft].label, 0),
+                     sy = w.centroids.at<double>(w.parts[shaft].label, 1);
         const Strip* best = nullptr;
         int count = 0;
+        double far = -1;
         for (const Strip& s : w.strips) {
             if (root(s.part_a) != r) continue;
             ++count;
-            if (!best || s.diameter_px < best->diameter_px) best = &s;
+            const double d = std::hypot(s.e.x - sx, s.e.y - sy);
+            if (!best || d > far + 0.5 * s.diameter_px ||
+                (d > far - 0.5 * s.diameter_px && s.diameter_px < best->diameter_px))
+                best = &s, far = d;
         }
         StripMarker& m = out[found];
         m = {};

@@ -39,7 +39,8 @@ struct StripMarkerParams {
     double window_fraction = 0.1;      // local brightness window, x frame height
     double min_band_fraction = 0.025;  // narrowest tool band kept, x frame height
     double bright_ratio = 0.5, dark_ratio = 0.5, dark_fill = 0.6;
-    int min_contrast = 24, min_level = 4;
+    int min_contrast = 24, min_level = 12;
+    double bright_margin = 0.25;
 };
 
 struct StripMarker {
