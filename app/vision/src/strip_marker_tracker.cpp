@@ -78,8 +78,6 @@ void StripMarkerTracker::configure(const hal::FrameFormat& format) {
     const int window = odd(params_.window_fraction * format.height);
     w.thin_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(band, band));
     w.band_element = w.thin_element;
-    w.near_element =
-        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * band + 1, 2 * band + 1));
     w.window_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(window, window));
     w.parts.resize(kMaxParts);
     for (Part& p : w.parts) p.hull.reserve(256);
