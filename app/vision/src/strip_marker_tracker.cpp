@@ -13,7 +13,8 @@ constexpr int kMaxParts = 24;  // the largest tool parts considered (pairs: 276)
 
 struct Part {
     int label = 0, area = 0;
-    double mean = 0;  // grey level
+    double mean = 0;      // grey level
+    bool leaves = false;  // reaches the picture's edge or the unlit rim: the shaft side
     cv::Rect box;
     std::vector<cv::Point> hull;
 };
@@ -40,6 +41,100 @@ bool chord(const std::vector<cv::Point>& poly, Point2 o, Point2 dir, double& t0,
         t0 = std::min(t0, t), t1 = std::max(t1, t);
     }
     return t1 > t0;
+}
+
+// Bilinear sample of an 8-bit image (clamped to its border).
+double sample(const cv::Mat& img, double x, double y) {
+    x = std::clamp(x, 0.0, img.cols - 1.001), y = std::clamp(y, 0.0, img.rows - 1.001);
+    const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+    const double fx = x - x0, fy = y - y0;
+    const std::uint8_t* r0 = img.ptr<std::uint8_t>(y0);
+    const std::uint8_t* r1 = img.ptr<std::uint8_t>(y0 + 1);
+    return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) +
+           fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+}
+
+// One silhouette edge of the shaft on the ray origin + t dir (t >= 0 outwards from
+// the axis), near the thresholded edge `at`. Under the scope's coaxial light the limb
+// of a cylinder darkens to a rim darker than its surroundings; the threshold stops
+// short of it. With a rim (the minimum near `at` 8 grey levels below the background
+// outside, the median of 9 samples past it) the edge is where the profile climbs
+// back half-way from the rim to the background; without one (a background darker
+// than the limb) where it falls half-way from the metal (at `at` - 3 px) to the
+// background. Linear interpolation between 0.5 px samples. False when neither.
+bool silhouette_edge(const cv::Mat& img, Point2 o, Point2 dir, double at, double& out) {
+    constexpr double kStep = 0.5;
+    const auto p = [&](double t) { return sample(img, o.x + t * dir.x, o.y + t * dir.y); };
+    const double reach = std::max(6.0, 0.3 * at);
+    std::array<double, 9> outside{};
+    for (int k = 0; k < 9; ++k) outside[k] = p(at + reach + 1 + k);
+    std::nth_element(outside.begin(), outside.begin() + 4, outside.end());
+    const double bg = outside[4];
+    double t_min = at, p_min = 1e9;
+    for (double t = std::max(0.0, at - 3); t <= at + reach; t += kStep)
+        if (const double v = p(t); v < p_min) p_min = v, t_min = t;
+    if (bg - p_min >= 8) {
+        const double level = 0.5 * (p_min + bg);
+        double prev = p_min;
+        for (double t = t_min + kStep; t <= at + reach + 1; t += kStep) {
+            const double v = p(t);
+            if (v >= level) {
+                out = t - kStep * (v - level) / (v - prev);
+                return true;
+            }
+            prev = v;
+        }
+        return false;
+    }
+    const double metal = p(std::max(0.0, at - 3));
+    if (metal - bg < 8) return false;
+    const double level = 0.5 * (metal + bg);
+    double prev = metal;
+    for (double t = std::max(0.0, at - 3) + kStep; t <= at + reach + 1; t += kStep) {
+        const double v = p(t);
+        if (v <= level) {
+            out = t - kStep * (level - v) / (prev - v);
+            return true;
+        }
+        prev = v;
+    }
+    return false;
+}
+
+// The strip's middle along the axis, measured near a silhouette, on the line
+// o + t u (t from t0 to t1, metal at both ends, the strip between): the midpoint of
+// the two places where the profile crosses half-way between the metal at that end
+// and the darkest paint. False when either crossing is missing.
+bool strip_middle(const cv::Mat& img, Point2 o, Point2 u, double t0, double t1, double& out) {
+    constexpr double kStep = 0.5;
+    const auto p = [&](double t) { return sample(img, o.x + t * u.x, o.y + t * u.y); };
+    double dark = 1e9;
+    for (double t = t0; t <= t1; t += kStep) dark = std::min(dark, p(t));
+    const double ma = p(t0), mb = p(t1);
+    if (ma - dark < 12 || mb - dark < 12) return false;
+    const double la = 0.5 * (ma + dark), lb = 0.5 * (mb + dark);
+    double ta = 0, tb = 0, prev = ma;
+    bool fa = false, fb = false;
+    for (double t = t0 + kStep; t <= t1; t += kStep) {
+        const double v = p(t);
+        if (v < la) {
+            ta = t - kStep * (la - v) / (prev - v), fa = true;
+            break;
+        }
+        prev = v;
+    }
+    prev = mb;
+    for (double t = t1 - kStep; t >= t0; t -= kStep) {
+        const double v = p(t);
+        if (v < lb) {
+            tb = t + kStep * (lb - v) / (prev - v), fb = true;
+            break;
+        }
+        prev = v;
+    }
+    if (!fa || !fb || !(tb > ta)) return false;
+    out = 0.5 * (ta + tb);
+    return true;
 }
 
 }  // namespace
@@ -87,9 +182,22 @@ void StripMarkerTracker::configure(const hal::FrameFormat& format) {
     w.group.resize(kMaxParts);
 }
 
+double StripMarkerTracker::undistorted_diameter(Point2 e, Point2 a, Point2 b,
+                                                double diameter) const {
+    const double len = std::hypot(b.x - a.x, b.y - a.y);
+    if (!undistort_ || !(len > 0)) return diameter;
+    const Point2 across{(b.x - a.x) / len, (b.y - a.y) / len};
+    const double h = diameter / 2;
+    const Point2 p = undistort_({e.x - h * across.x, e.y - h * across.y});
+    const Point2 q = undistort_({e.x + h * across.x, e.y + h * across.y});
+    return std::hypot(q.x - p.x, q.y - p.y);
+}
+
 void StripMarkerTracker::locate(StripMarker& m) const {
     m.located = false;
-    if (!undistort_ || table_.distances_mm.size() < 2 || !(params_.diameter_mm > 0)) return;
+    if (!undistort_ || table_.distances_mm.size() < 2 || !(params_.diameter_mm > 0) ||
+        !(camera_.fx > 0))
+        return;
     // M across the axis, both ends undistorted: the table holds undistorted separations.
     const double len = std::hypot(m.b.x - m.a.x, m.b.y - m.a.y);
     if (!(len > 0)) return;
@@ -98,8 +206,17 @@ void StripMarkerTracker::locate(StripMarker& m) const {
     const Point2 p = undistort_({m.e.x - h * across.x, m.e.y - h * across.y});
     const Point2 q = undistort_({m.e.x + h * across.x, m.e.y + h * across.y});
     const Point2 e = undistort_(m.e);
-    const double diameter = std::hypot(q.x - p.x, q.y - p.y);
+    double diameter = std::hypot(q.x - p.x, q.y - p.y);
     if (!(diameter > 0)) return;
+    // The table's dots lie in a plane facing the camera; the shaft's round section
+    // off the optical axis (angle t, tan t = rho / f) images wider: by 1 / cos^2 t
+    // along the radial direction, not at all across it (psi: M's angle to the radial).
+    const double rx = e.x - camera_.cx, ry = e.y - camera_.cy, rho = std::hypot(rx, ry);
+    if (rho > 0) {
+        const double cos2t = 1 / (1 + (rho / camera_.fx) * (rho / camera_.fx));
+        const double cpsi = (across.x * rx + across.y * ry) / rho;
+        diameter /= std::sqrt(cpsi * cpsi / cos2t + (1 - cpsi * cpsi));
+    }
     // The tool's diameter D shows as many pixels as a separation of marker_mm * M / D.
     m.depth_mm = table_.depth_for_separation(table_.marker_mm * diameter / params_.diameter_mm);
     m.depth_pinhole_mm = camera_.fx * params_.diameter_mm / diameter;
@@ -189,6 +306,15 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
             }
             cv::convexHull(w.points, p.hull);
             p.mean = sum / p.area;
+            // The shaft leaves the picture: the part comes within `band` px of the
+            // image border or of unlit pixels (outside the scope's field of view).
+            const cv::Rect near = cv::Rect(p.box.x - band, p.box.y - band, p.box.width + 2 * band,
+                                           p.box.height + 2 * band);
+            const cv::Rect clipped = near & cv::Rect(0, 0, cols, rows);
+            p.leaves = clipped != near;
+            double unlit = 255;
+            if (!p.leaves) cv::minMaxLoc(w.gray(clipped), &unlit);
+            p.leaves = p.leaves || unlit <= params_.unlit_level;
         }
         // A wide uniform part shows no contrast inside: its hull is the part.
         for (std::size_t k = 0; k < nparts; ++k)
@@ -268,9 +394,48 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
             s.b = {pa.x + c1 * v.x, pa.y + c1 * v.y};
             s.c = {pb.x + d1 * v.x, pb.y + d1 * v.y};
             s.d = {pb.x + d0 * v.x, pb.y + d0 * v.y};
-            // A shaded or partly hidden part only ever loses pixels to the threshold: M is
-            // the larger of the chord through E and the mean of AB and CD.
-            s.diameter_px = std::max(s.diameter_px, 0.5 * ((c1 - c0) + (d1 - d0)));
+            // M and E across the axis from the metal's silhouettes just outside the strip
+            // on both sides (the black paint need not stand out from a dark
+            // background): M is the mean of the two widths, the trapezoid's mid-line.
+            const double inset = std::max(2.0, 0.15 * (hi - lo));
+            const Point2 qa{s.e.x + (lo - inset) * u.x, s.e.y + (lo - inset) * u.y},
+                qb{s.e.x + (hi + inset) * u.x, s.e.y + (hi + inset) * u.y};
+            const Point2 nv{-v.x, -v.y};
+            double la = -c0, ra = c1, lb = -d0, rb = d1;
+            if (!silhouette_edge(w.gray, qa, nv, -c0, la) ||
+                !silhouette_edge(w.gray, qa, v, c1, ra))
+                la = -c0, ra = c1;
+            if (!silhouette_edge(w.gray, qb, nv, -d0, lb) ||
+                !silhouette_edge(w.gray, qb, v, d1, rb))
+                lb = -d0, rb = d1;
+            s.a = {qa.x - la * v.x, qa.y - la * v.y};
+            s.b = {qa.x + ra * v.x, qa.y + ra * v.y};
+            s.c = {qb.x + rb * v.x, qb.y + rb * v.y};
+            s.d = {qb.x - lb * v.x, qb.y - lb * v.y};
+            // A rounded head, a shadow or a partly hidden part only narrows a side, so
+            // the wider side is the tool (AB and CD differ by the perspective across
+            // one strip, a few percent at most).
+            const bool wide_a = la + ra >= lb + rb;
+            s.diameter_px = wide_a ? la + ra : lb + rb;
+            const double mid = wide_a ? 0.5 * (ra - la) : 0.5 * (rb - lb);
+            s.e = {s.e.x + mid * v.x, s.e.y + mid * v.y};
+            // Along the axis: the strip's rings image as ellipses whose front arcs are
+            // displaced along the axis when the shaft leans towards or away from the
+            // camera, by D sqrt(1 - xi^2) at xi radii off the midline; the rings' centres
+            // (and E) are where that displacement is 0. The strip's middle measured on
+            // the midline and at xi = +-0.8 gives D and the true middle.
+            const double len = hi - lo, from = lo - 0.5 * len - 2, to = hi + 0.5 * len + 2;
+            const double off = 0.8 * 0.5 * s.diameter_px;
+            double mc, m0, m1;
+            const Point2 o0{s.e.x - off * v.x, s.e.y - off * v.y},
+                o1{s.e.x + off * v.x, s.e.y + off * v.y};
+            if (strip_middle(w.gray, s.e, u, from, to, mc) &&
+                strip_middle(w.gray, o0, u, from, to, m0) &&
+                strip_middle(w.gray, o1, u, from, to, m1)) {
+                const double side = 0.5 * (m0 + m1), d = (mc - side) / (1 - 0.6);
+                const double along = mc - d;
+                s.e = {s.e.x + along * u.x, s.e.y + along * u.y};
+            }
             if (s.diameter_px < band || (hi - lo) > 3 * s.diameter_px) continue;
             w.strips.push_back(s);
         }
@@ -290,14 +455,16 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
         bool seen = false;
         for (std::size_t m = 0; m < found; ++m) seen = seen || roots[m] == r;
         if (seen) continue;
-        // The nearest strip to the tip is the one farthest from the shaft (the tool's
-        // largest part, which runs out of the picture); the book's smallest M decides
-        // when the largest part is ambiguous (one strip between two parts).
+        // The nearest strip to the tip is the one farthest from the shaft: the largest
+        // part that leaves the picture, else the largest part.
         int shaft = -1;
-        for (std::size_t k = 0; k < nparts; ++k)
-            if (root(static_cast<int>(k)) == r &&
-                (shaft < 0 || w.parts[k].area > w.parts[shaft].area))
+        for (std::size_t k = 0; k < nparts; ++k) {
+            if (root(static_cast<int>(k)) != r) continue;
+            const Part& p = w.parts[k];
+            if (shaft < 0 || (p.leaves && !w.parts[shaft].leaves) ||
+                (p.leaves == w.parts[shaft].leaves && p.area > w.parts[shaft].area))
                 shaft = static_cast<int>(k);
+        }
         const double sx = w.centroids.at<double>(w.parts[shaft].label, 0),
                      sy = w.centroids.at<double>(w.parts[shaft].label, 1);
         const Strip* best = nullptr;
@@ -311,6 +478,20 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
                 (d > far - 0.5 * s.diameter_px && s.diameter_px < best->diameter_px))
                 best = &s, far = d;
         }
+        // The book's rule wins where the perspective is clear: a strip clearly (more
+        // than `taper` relatively) narrower than the others, undistorted, is nearer the
+        // tip than they are.
+        const Strip* narrowest = nullptr;
+        double m_min = 1e300, m_next = 1e300;
+        for (const Strip& s : w.strips) {
+            if (root(s.part_a) != r) continue;
+            const double m = undistorted_diameter(s.e, s.a, s.b, s.diameter_px);
+            if (m < m_min)
+                m_next = m_min, m_min = m, narrowest = &s;
+            else
+                m_next = std::min(m_next, m);
+        }
+        if (narrowest && m_next < 1e300 && m_min < (1 - params_.taper) * m_next) best = narrowest;
         StripMarker& m = out[found];
         m = {};
         m.a = best->a, m.b = best->b, m.c = best->c, m.d = best->d, m.e = best->e;

@@ -39,8 +39,8 @@ struct StripMarkerParams {
     double window_fraction = 0.1;      // local brightness window, x frame height
     double min_band_fraction = 0.025;  // narrowest tool band kept, x frame height
     double bright_ratio = 0.5, dark_ratio = 0.5, dark_fill = 0.6;
-    int min_contrast = 24, min_level = 12;
-    double bright_margin = 0.25;
+    int min_contrast = 24, min_level = 12, unlit_level = 4;
+    double bright_margin = 0.25, taper = 0.04;
 };
 
 struct StripMarker {
@@ -68,6 +68,7 @@ public:
 private:
     struct Work;
     void locate(StripMarker& m) const;
+    double undistorted_diameter(Point2 e, Point2 a, Point2 b, double diameter) const;
     StripMarkerParams params_;
     calibration::SeparationTable table_;
     PinholeCamera camera_{};
