@@ -6,14 +6,18 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
+#include "endotower/app/json_line.hpp"
+#include "endotower/app/overlay_canvas.hpp"
 #include "endotower/calibration/field_of_view.hpp"
 #include "endotower/calibration/separation_table.hpp"
 #include "endotower/scene/renderer.hpp"
 #include "endotower/scene/scenario.hpp"
+#include "endotower/vision/strip_marker_stage.hpp"
 #include "endotower/vision/strip_marker_tracker.hpp"
 
 namespace endotower::vision {
@@ -272,6 +276,55 @@ TEST(StripMarkers, Tables31And32OnTheSimulator) {
     EXPECT_LE(ez / nz, 0.03);
     EXPECT_LE(ex / nx, 0.05);
     EXPECT_LE(ey / ny, 0.05);
+}
+
+// The stage's trace member and overlay: calibrated, E in mm as "tip_mm"; without a
+// calibration "tip_mm" is null; a frame without a tool gives an empty list.
+TEST(StripMarkers, StageWritesTheTraceMember) {
+    SyntheticTool tool;
+    cv::Mat img = tool.draw();
+    cv::Mat empty(480, 640, CV_8UC3, cv::Scalar(110, 110, 110));
+    StripMarkerTracker t = calibrated_tracker(5.0);
+    StripMarkerTracker raw;
+    for (StripMarkerTracker* tracker : {&t, &raw}) {
+        StripMarkerStage stage(*tracker);
+        stage.configure(frame_of(img).format);
+        app::OverlayCanvas canvas;
+        canvas.configure(640, 480);
+        for (cv::Mat* m : {&img, &empty}) {
+            app::JsonLine line;
+            line.begin_object();
+            canvas.clear();
+            app::AnalysisContext ctx{frame_of(*m), {}, canvas, line, 0};
+            stage.process(ctx);
+            line.end_object();
+            const nlohmann::json j = nlohmann::json::parse(line.view());
+            ASSERT_TRUE(j.contains("markers")) << line.view();
+            if (m == &empty) {
+                EXPECT_TRUE(j["markers"].empty()) << line.view();
+                EXPECT_EQ(canvas.layer().rect_count, 0u);
+                continue;
+            }
+            ASSERT_EQ(j["markers"].size(), 1u) << line.view();
+            const nlohmann::json& k = j["markers"][0];
+            const double xe = tool.strip_centre(0), we = tool.width_at(xe), z = kFocal * 5.0 / we;
+            EXPECT_NEAR(k["center_px"][0].get<double>(), xe, 0.5);
+            EXPECT_NEAR(k["center_px"][1].get<double>(), tool.cy, 0.5);
+            EXPECT_EQ(k["corners_px"].size(), 4u);
+            EXPECT_NEAR(k["diameter_px"].get<double>(), we, 0.5);
+            EXPECT_EQ(k["strips"].get<int>(), 3);
+            EXPECT_GT(canvas.layer().rect_count, 0u);
+            if (tracker == &raw) {
+                EXPECT_TRUE(k["tip_mm"].is_null());
+                EXPECT_TRUE(k["depth_mm"].is_null());
+                continue;
+            }
+            EXPECT_NEAR(k["depth_mm"].get<double>(), z, 0.015 * z);
+            EXPECT_NEAR(k["tip_mm"][0].get<double>(), (xe - 320) * z / kFocal, 0.25);
+            EXPECT_NEAR(k["tip_mm"][1].get<double>(), 0.0, 0.1);
+            EXPECT_NEAR(k["tip_mm"][2].get<double>(), z, 0.015 * z);
+        }
+    }
 }
 
 }  // namespace
