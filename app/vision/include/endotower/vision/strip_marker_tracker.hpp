@@ -1,26 +1,23 @@
 // StripMarkerTracker: black strip markers on a tool's shaft (book ch. 3, figs. 3.1,
-// 3.2, eq. 3.1-3.2): the strips, the trapezoid ABCD of the visible strip nearest the
-// tip and its centre E, the apparent tool diameter M -> depth, E -> millimetres.
-//
-// Per frame (BGR24 or GREY8, any size; buffers sized in configure()):
-//  1. tool parts: thin bright structures (narrower than `min_band_fraction` x height,
-//     e.g. grid lines) are removed by a grey opening; the local tool brightness L is
-//     the grey maximum of that over a square of `window_fraction` x height; a pixel is
-//     tool where it is at least `bright_ratio` (0.6) x L and L shows `min_contrast`
-//     (24) over the local minimum; a binary opening of the same size keeps the bands;
-//  2. a strip lies between two tool parts (the bright bands of fig. 3.1): the convex
-//     hull of two parts minus the parts, at least `dark_fill` (0.6) dark (below
-//     `dark_ratio` (0.5) x L) and no other part inside;
-//  3. blob analysis of that region: E its centroid, the axis u from part to part,
-//     A, B the extremes across u on the side of the first part, C, D on the other;
-//     M the region's width across u through E;
-//  4. strips sharing a part belong to one tool; the strip with the smallest M is the
-//     one nearest the tip (book: "the smallest M is the one closest to the surgical
-//     site"), so one or two occluded strips leave the others usable.
-// With a calibration (set_calibration) E and M are undistorted, depth comes from the
-// separation table (diameter_mm against the table's marker_mm), x, y from eq. 3.1/3.2
-// with the principal point as offsets; depth_pinhole_mm = fx D / M is the cross-check.
-// No exceptions; a frame without strips gives no markers.
+// 3.2, eq. 3.1-3.2): the trapezoid ABCD of the visible strip nearest the tip, its
+// centre E, the apparent diameter M -> depth, E -> millimetres. docs/markers.md.
+// Per frame (BGR24 or GREY8; buffers sized in configure(), no exceptions):
+//  1. tool parts: grey opening removes bright lines thinner than `min_band_fraction`
+//     (0.025) x height; tool = brighter than the lit picture's median by
+//     max(min_contrast / 2, bright_margin (0.25) x median); binary opening, same size;
+//  2. a strip lies between two parts: their joint convex hull minus the parts, >=
+//     `dark_fill` (0.6) darker than `dark_ratio` (0.5) x the local tool brightness
+//     (grey max over `window_fraction` (0.1) x height), mean < dark_ratio x both parts;
+//  3. blob analysis: u from part to part; AB, CD where the parts end; M across u from
+//     the silhouettes (the dark limb under coaxial light), the wider side; E along u
+//     where the rings' front-arc displacement vanishes (strip middles at 0 and +-0.8 r);
+//  4. strips sharing a part are one tool's; the strip nearest the tip is the one
+//     farthest from the shaft (the largest part leaving the picture), unless one is
+//     `taper` (4 %) narrower than the rest (the book: smallest M is nearest the tip).
+//     One or two occluded strips leave the others usable.
+// set_calibration: E and M undistorted; M divided by the off-axis magnification of a
+// round section; depth from the table (diameter_mm against marker_mm); x, y by eq.
+// 3.1/3.2, the principal point as offsets; depth_pinhole_mm = fx D / M cross-checks.
 #pragma once
 
 #include <array>
