@@ -90,7 +90,7 @@ std::string render_marker_summary(const MarkerScore& s) {
     std::sort(rows.begin(), rows.end());
     // The book's column order: the four diagonal points, then the four on the axes.
     const auto key = [](const std::pair<double, double>& c) {
-        return std::make_tuple(c.first == 0 || c.second == 0, -c.second, -c.first);
+        return std::make_tuple(c.first == 0 || c.second == 0, c.second == 0, -c.second, -c.first);
     };
     std::sort(cols.begin(), cols.end(),
               [&](const auto& a, const auto& b) { return key(a) < key(b); });

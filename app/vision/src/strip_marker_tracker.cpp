@@ -21,8 +21,9 @@ struct Part {
 
 struct Strip {
     int part_a = 0, part_b = 0;
-    Point2 a, b, c, d, e;
+    Point2 a, b, c, d, e, v;
     double diameter_px = 0;
+    double width_a = 0, width_b = 0, mid_a = 0, mid_b = 0;  // M and E's offset per side
 };
 
 // Where the line origin + t dir crosses the convex polygon: [t0, t1]; false if it misses.
@@ -418,6 +419,9 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
             const bool wide_a = la + ra >= lb + rb;
             s.diameter_px = wide_a ? la + ra : lb + rb;
             const double mid = wide_a ? 0.5 * (ra - la) : 0.5 * (rb - lb);
+            s.width_a = la + ra, s.width_b = lb + rb, s.mid_a = 0.5 * (ra - la),
+            s.mid_b = 0.5 * (rb - lb);
+            s.v = v;
             s.e = {s.e.x + mid * v.x, s.e.y + mid * v.y};
             // Along the axis: the strip's rings image as ellipses whose front arcs are
             // displaced along the axis when the shaft leans towards or away from the
@@ -455,47 +459,44 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
         bool seen = false;
         for (std::size_t m = 0; m < found; ++m) seen = seen || roots[m] == r;
         if (seen) continue;
-        // The nearest strip to the tip is the one farthest from the shaft: the largest
-        // part that leaves the picture, else the largest part.
-        int shaft = -1;
-        for (std::size_t k = 0; k < nparts; ++k) {
-            if (root(static_cast<int>(k)) != r) continue;
-            const Part& p = w.parts[k];
-            if (shaft < 0 || (p.leaves && !w.parts[shaft].leaves) ||
-                (p.leaves == w.parts[shaft].leaves && p.area > w.parts[shaft].area))
-                shaft = static_cast<int>(k);
-        }
-        const double sx = w.centroids.at<double>(w.parts[shaft].label, 0),
-                     sy = w.centroids.at<double>(w.parts[shaft].label, 1);
+        // The nearest strip to the tip: when exactly one of the tool's parts leaves the
+        // picture, that is the shaft and the strip farthest from it is nearest the tip.
+        // Otherwise (the rim also cuts the head, or nothing leaves) the book's rule:
+        // the smallest M (undistorted) is nearest the tip.
+        int shaft = -1, leaving = 0;
+        for (std::size_t k = 0; k < nparts; ++k)
+            if (root(static_cast<int>(k)) == r && w.parts[k].leaves)
+                ++leaving, shaft = static_cast<int>(k);
         const Strip* best = nullptr;
         int count = 0;
-        double far = -1;
+        double key = 0;
         for (const Strip& s : w.strips) {
             if (root(s.part_a) != r) continue;
             ++count;
-            const double d = std::hypot(s.e.x - sx, s.e.y - sy);
-            if (!best || d > far + 0.5 * s.diameter_px ||
-                (d > far - 0.5 * s.diameter_px && s.diameter_px < best->diameter_px))
-                best = &s, far = d;
+            const double k =
+                leaving == 1 ? -std::hypot(s.e.x - w.centroids.at<double>(w.parts[shaft].label, 0),
+                                           s.e.y - w.centroids.at<double>(w.parts[shaft].label, 1))
+                             : undistorted_diameter(s.e, s.a, s.b, s.diameter_px);
+            if (!best || k < key) best = &s, key = k;
         }
-        // The book's rule wins where the perspective is clear: a strip clearly (more
-        // than `taper` relatively) narrower than the others, undistorted, is nearer the
-        // tip than they are.
-        const Strip* narrowest = nullptr;
-        double m_min = 1e300, m_next = 1e300;
-        for (const Strip& s : w.strips) {
-            if (root(s.part_a) != r) continue;
-            const double m = undistorted_diameter(s.e, s.a, s.b, s.diameter_px);
-            if (m < m_min)
-                m_next = m_min, m_min = m, narrowest = &s;
-            else
-                m_next = std::min(m_next, m);
-        }
-        if (narrowest && m_next < 1e300 && m_min < (1 - params_.taper) * m_next) best = narrowest;
         StripMarker& m = out[found];
         m = {};
         m.a = best->a, m.b = best->b, m.c = best->c, m.d = best->d, m.e = best->e;
         m.diameter_px = best->diameter_px;
+        // The strip nearest the tip has the head on one side and a band it shares with
+        // the next strip on the other: the band is a clean stretch of shaft (the head
+        // may be rounded, shadowed or cut), so its side gives M when it is known.
+        int uses_a = 0, uses_b = 0;
+        for (const Strip& s : w.strips)
+            for (int part : {s.part_a, s.part_b})
+                uses_a += part == best->part_a, uses_b += part == best->part_b;
+        if ((uses_a > 1) != (uses_b > 1)) {
+            const bool band_a = uses_a > 1;
+            const double used_mid = best->width_a >= best->width_b ? best->mid_a : best->mid_b;
+            const double shift = (band_a ? best->mid_a : best->mid_b) - used_mid;
+            m.diameter_px = band_a ? best->width_a : best->width_b;
+            m.e = {m.e.x + shift * best->v.x, m.e.y + shift * best->v.y};
+        }
         m.strips = count;
         locate(m);
         roots[found++] = r;

@@ -12,9 +12,9 @@
 //     the silhouettes (the dark limb under coaxial light), the wider side; E along u
 //     where the rings' front-arc displacement vanishes (strip middles at 0 and +-0.8 r);
 //  4. strips sharing a part are one tool's; the strip nearest the tip is the one
-//     farthest from the shaft (the largest part leaving the picture), unless one is
-//     `taper` (4 %) narrower than the rest (the book: smallest M is nearest the tip).
-//     One or two occluded strips leave the others usable.
+//     farthest from the shaft when exactly one part leaves the picture, else the
+//     book's: the smallest M (undistorted). One or two occluded strips leave the
+//     others usable.
 // set_calibration: E and M undistorted; M divided by the off-axis magnification of a
 // round section; depth from the table (diameter_mm against marker_mm); x, y by eq.
 // 3.1/3.2, the principal point as offsets; depth_pinhole_mm = fx D / M cross-checks.
@@ -37,7 +37,7 @@ struct StripMarkerParams {
     double min_band_fraction = 0.025;  // narrowest tool band kept, x frame height
     double bright_ratio = 0.5, dark_ratio = 0.5, dark_fill = 0.6;
     int min_contrast = 24, min_level = 12, unlit_level = 4;
-    double bright_margin = 0.25, taper = 0.04;
+    double bright_margin = 0.25;
 };
 
 struct StripMarker {
