@@ -214,13 +214,14 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     }
     if (const YAML::Node a = root["analysis"]) {
         if (!r.keys(a, "analysis", {"stage", "tracker", "tool_model", "tool_diameter_mm", "timeout_ms", "virtual_cost_ms",
-                                  "max_overlay_age", "regions", "gestures"}) ||
+                                  "max_overlay_age", "regions", "gestures", "markers"}) ||
             !r.text(a, "stage", "analysis.stage", c.stage) || !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
             !r.text(a, "tool_model", "analysis.tool_model", c.tool_model) ||
             !r.number(a, "tool_diameter_mm", "analysis.tool_diameter_mm", 1, 20, c.tool_diameter_mm) ||
             !r.number(a, "timeout_ms", "analysis.timeout_ms", 0, 60000, c.analysis_timeout_ms) ||
             !r.number(a, "virtual_cost_ms", "analysis.virtual_cost_ms", 0, 60000, c.analysis_virtual_cost_ms) ||
-            !r.integer(a, "max_overlay_age", "analysis.max_overlay_age", 0, 1000, c.max_overlay_age))
+            !r.integer(a, "max_overlay_age", "analysis.max_overlay_age", 0, 1000, c.max_overlay_age) ||
+            !r.boolean(a, "markers", "analysis.markers", c.markers))
             return false;
         if (c.stage != "status_badge" && c.stage != "none")
             return r.fail(a["stage"], "analysis.stage",

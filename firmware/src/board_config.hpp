@@ -38,6 +38,8 @@ struct BoardConfig {
     // analysis.gestures (issue 6): on when the map is present
     bool gestures = false;
     std::string gesture_model;     // a file of 'endotower train-gestures'
+    // analysis.markers (issue 6): strip-marker tracking (docs/markers.md)
+    bool markers = false;
     double gesture_hold_ms = 1000.0;  // held still this long before it fires
 
     // display (drivers/display): display.card, .connector, .mode "WxH@HZ", .zero_copy, .atomic

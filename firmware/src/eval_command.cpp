@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "endotower/eval/marker_metrics.hpp"
 #include "endotower/eval/derived_truth.hpp"
 #include "endotower/eval/report.hpp"
 #include "endotower/system/syscall.hpp"
@@ -48,7 +49,9 @@ void print_eval_help() {
         "thresholds (exit status 1 when one fails; R is 0..1 or a percentage like 80%%):\n"
         "  --min-success R  --max-tip-error PX  --max-p95-tip-error PX  --max-tip-error-mm MM\n"
         "  --max-false-positives PER_FRAME  --min-identity R  --min-gesture-rate R\n"
-        "  --min-region-good R  --max-corner-error PX\n\n"
+        "  --min-region-good R  --max-corner-error PX\n"
+        "  --max-marker-depth-error R  --max-marker-xy-error R (strip markers, mean relative\n"
+        "                        errors of the marker position, tables 3.1/3.2; docs/markers.md)\n\n"
         "Exit status: 0 every threshold passed, 1 a threshold failed (or the report could\n"
         "not be written), 2 bad usage or malformed input (FILE:LINE: field message).\n");
 }
@@ -119,6 +122,7 @@ int run_eval_command(const Args& args) {
     std::vector<std::pair<std::int64_t, std::string>> masks;
     std::optional<int> first_index;
     eval::Thresholds th;
+    std::optional<double> max_marker_depth, max_marker_xy;
     struct Limit {
         const char* flag;
         std::optional<double> eval::Thresholds::*field;
@@ -148,6 +152,11 @@ int run_eval_command(const Args& args) {
         else if (k == "--homography") homography = v;
         else if (k == "--homography-maps") maps = v;
         else if (k == "--region") region = v;
+        else if (k == "--max-marker-depth-error" || k == "--max-marker-xy-error") {
+            double x = 0;
+            if (!parse_value(v, true, x)) return usage_error(k + " needs a rate in 0..1 (or 0..100%), got '" + v + "'");
+            (k == "--max-marker-depth-error" ? max_marker_depth : max_marker_xy) = x;
+        }
         else if (k == "--mask") {
             std::int64_t frame = 0;
             std::string file = v;
@@ -187,7 +196,10 @@ int run_eval_command(const Args& args) {
         return usage_error("--homography-maps is first-to-last or last-to-first, got '" + maps + "'");
     if (!region.empty() && homography.empty()) return usage_error("--region goes with --homography");
 
+    if ((max_marker_depth || max_marker_xy) && truth.empty())
+        return usage_error("the marker thresholds go with --truth (the simulator's strip markers)");
     eval::EvalResult r;
+    eval::MarkerScore markers;
     r.trace_path = trace;
     std::vector<eval::AnalysisFrame> frames;
     std::string error;
@@ -206,6 +218,7 @@ int run_eval_command(const Args& args) {
         r.tools = eval::score_tools(gt, frames);
         r.gestures = eval::score_gestures(gt, frames);
         r.regions = eval::score_regions(gt, frames);
+        markers = eval::score_markers(gt, frames);
     } else if (!masks.empty()) {
         std::vector<eval::TruthFrame> gt;
         for (const auto& entry : masks) {
@@ -298,9 +311,27 @@ int run_eval_command(const Args& args) {
         }
         std::printf("report: %s/report.md\n", report.c_str());
     }
+    // Strip markers (issue 6): scored when the truth has them.
+    bool markers_pass = true;
+    if (!markers.empty()) std::fputs(eval::render_marker_summary(markers).c_str(), stdout);
+    const auto marker_check = [&](const char* what, const std::optional<double>& limit, std::optional<double> value) {
+        if (!limit) return;
+        const bool pass = value && *value <= *limit;
+        if (value)
+            std::printf("threshold %s: %.2f %% <= %.2f %%: %s\n", what, 100 * *value, 100 * *limit, pass ? "pass" : "FAIL");
+        else
+            std::printf("threshold %s: no located marker: FAIL\n", what);
+        markers_pass = markers_pass && pass;
+    };
+    marker_check("marker depth error", max_marker_depth,
+                 markers.depth_n > 0 ? std::optional<double>(markers.depth_error) : std::nullopt);
+    marker_check("marker x error", max_marker_xy,
+                 markers.x_n > 0 ? std::optional<double>(markers.x_error) : std::nullopt);
+    marker_check("marker y error", max_marker_xy,
+                 markers.y_n > 0 ? std::optional<double>(markers.y_error) : std::nullopt);
     for (const eval::ThresholdCheck& c : checks)
         if (!c.pass) return kExitFailure;
-    return kExitOk;
+    return markers_pass ? kExitOk : kExitFailure;
 }
 
 }  // namespace endotower::firmware

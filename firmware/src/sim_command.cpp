@@ -27,6 +27,7 @@
 #include "endotower/eval/derived_truth.hpp"
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
+#include "endotower/vision/strip_marker_stage.hpp"
 #include "endotower/vision/region_stage.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
@@ -307,6 +308,31 @@ int run_sim_command(const Args& args) {
                 return q;
             };
             tracking.set_camera({cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected, board.tool_diameter_mm);
+        }
+    }
+    // Strip markers (issue 6): millimetres with a calibration that has the two-dot table.
+    vision::StripMarkerParams marker_params;
+    marker_params.diameter_mm = board.tool_diameter_mm;
+    vision::StripMarkerTracker marker_tracker(marker_params);
+    vision::StripMarkerStage markers(marker_tracker);
+    if (board.markers) {
+        chain.add(&markers);
+        const hal::FrameFormat f = source.format();
+        if (!calibration_stage || !cal.separation) {
+            std::printf("markers: no calibration with a separation table: positions in pixels only\n");
+        } else if (cal.width != f.width || cal.height != f.height || !undistorter.init(cal, error)) {
+            std::printf("markers: the calibration does not fit the input: positions in pixels only\n");
+        } else {
+            auto to_corrected = [&undistorter](vision::Point2 p) {
+                vision::Point2 q = p;
+                for (int i = 0; i < 12; ++i) {
+                    const calibration::Point2 s = undistorter.source_of(q.x, q.y);
+                    q.x += p.x - s.x;
+                    q.y += p.y - s.y;
+                }
+                return q;
+            };
+            marker_tracker.set_calibration(*cal.separation, {cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected);
         }
     }
     if (gestures) chain.add(&gesture_stage);

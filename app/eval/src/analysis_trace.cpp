@@ -87,6 +87,24 @@ bool parse_regions(const json& j, AnalysisFrame& f, std::string& error) {
     return true;
 }
 
+bool parse_markers(const json& j, AnalysisFrame& f, std::string& error) {
+    const json* markers = nullptr;
+    if (!get_array(j, "", "markers", markers, error)) return false;
+    f.has_markers = true;
+    for (std::size_t i = 0; i < markers->size(); ++i) {
+        const json& m = (*markers)[i];
+        const std::string p = "markers[" + std::to_string(i) + "].";
+        if (!m.is_object()) return not_object(p, error);
+        TraceMarker marker;
+        if (!get_point(m, p, "center_px", marker.center_px, error) ||
+            !get_number(m, p, "diameter_px", marker.diameter_px, error) ||
+            !get_int(m, p, "strips", marker.strips, error) || !opt_point3(m, p, "tip_mm", marker.tip_mm, error))
+            return false;
+        f.markers.push_back(marker);
+    }
+    return true;
+}
+
 }  // namespace
 
 bool parse_analysis_line(const std::string& line, AnalysisFrame& f, std::string& error) {
@@ -101,6 +119,7 @@ bool parse_analysis_line(const std::string& line, AnalysisFrame& f, std::string&
         return false;
     if (j.contains("regions") && !j["regions"].is_null() && !parse_regions(j, f, error))
         return false;
+    if (j.contains("markers") && !j["markers"].is_null() && !parse_markers(j, f, error)) return false;
     return true;
 }
 

@@ -37,6 +37,30 @@ bool parse_tool(const json& t, const std::string& p, TruthTool& tool, std::strin
         }
         tool.gesture = it->get<std::string>();
     }
+    if (t.contains("markers")) {
+        const json* markers = nullptr;
+        if (!get_array(t, p, "markers", markers, error)) return false;
+        for (std::size_t i = 0; i < markers->size(); ++i) {
+            const json& m = (*markers)[i];
+            const std::string q = p + "markers[" + std::to_string(i) + "].";
+            if (!m.is_object()) {
+                error = "field '" + q.substr(0, q.size() - 1) + "' must be an object";
+                return false;
+            }
+            TruthMarker marker;
+            std::optional<Point3> mm;
+            if (!get_int(m, q, "strip", marker.strip, error) ||
+                !get_point(m, q, "center_px", marker.center_px, error) ||
+                !opt_point3(m, q, "center_mm", mm, error) || !get_bool(m, q, "visible", marker.visible, error))
+                return false;
+            if (!mm) {
+                error = "missing field '" + q + "center_mm'";
+                return false;
+            }
+            marker.center_mm = *mm;
+            tool.markers.push_back(marker);
+        }
+    }
     return true;
 }
 

@@ -7,6 +7,7 @@
 //              "tip_mm": [x, y, z] or null}]           (tip_mm may also be absent)
 //   "gesture": {"label": name or null, "confidence", "held_ms", "fired"}
 //   "regions": [{"id", "polygon_px": [[x, y], ...], "state": "tracked"|"lost", "inliers"}]
+//   "markers": [{"center_px": [x, y], "diameter_px", "strips", "tip_mm": [x, y, z] or null}]
 // Gesture labels: gesture_metrics.hpp kGestureClasses ("none" reads as null).
 // Errors: "PATH:LINE: field 'tools[1].tip_px' must be [x, y] (two numbers)".
 #pragma once
@@ -40,12 +41,21 @@ struct TraceRegion {
     int inliers = 0;
 };
 
+struct TraceMarker {
+    Point2 center_px;
+    double diameter_px = 0;
+    int strips = 0;
+    std::optional<Point3> tip_mm;
+};
+
 struct AnalysisFrame {
     std::int64_t frame = 0;
     bool has_tools = false, has_regions = false;
     std::vector<TraceTool> tools;
     std::optional<TraceGesture> gesture;
     std::vector<TraceRegion> regions;
+    bool has_markers = false;
+    std::vector<TraceMarker> markers;
 };
 
 bool parse_analysis_line(const std::string& line, AnalysisFrame& out, std::string& error);

@@ -24,6 +24,14 @@ struct Point3 {
     double x = 0, y = 0, z = 0;
 };
 
+// A strip marker on a tool (book fig. 3.1), optional in truth.jsonl.
+struct TruthMarker {
+    int strip = 0;  // 0 = nearest the tip
+    Point2 center_px;
+    Point3 center_mm;
+    bool visible = true;
+};
+
 struct TruthTool {
     int id = 0;
     bool visible = true;
@@ -34,6 +42,7 @@ struct TruthTool {
     double width_px = 0;  // apparent shaft width at the head
     std::optional<Point3> tip_mm;
     std::string gesture;  // single-tool gesture label, "" if not given
+    std::vector<TruthMarker> markers;
 };
 
 struct TruthRegion {
