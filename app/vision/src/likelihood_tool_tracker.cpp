@@ -8,16 +8,52 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "constant_velocity.hpp"
+
 namespace endotower::vision {
 
 namespace {
 
 struct Candidate {
     double area = 0, length = 0, width = 0, shaft_width = 0, confidence = 0;
+    double axis_deg = 0;  // from the tip towards the rim
     Point2 tip, rim_end;
     bool has_edges = false;
+    bool split = false;       // cut from a region shared with another tool
+    bool end_hidden = false;  // its far end runs under the other tool
+    int track = -1;      // the track whose prediction cut it out, or -1
     Segment e1, e2;
 };
+
+// One tool over time (analysis px; angles in degrees from the tip towards the rim,
+// unwrapped): constant-velocity filters on the tip and the axis angle.
+struct Track {
+    int id = -1, missed = 0, coasted = 0;
+    double width = 0, confidence = 0;
+    Point2 rim_end;
+    ConstantVelocity x, y, angle;
+    Point2 tip() const { return {x.position(), y.position()}; }
+};
+
+// Process and measurement noise of the track filters (analysis px, degrees, per
+// frame). They matter only where two tools share a region (a single tool's own
+// measurement is always taken): a hand changes a tool's speed by a few px per frame
+// (the simulator's crossing moves 2 analysis px per frame at 3 cm/s); the measurement
+// noise is the tip's spread on a still tool.
+constexpr double kTipAccel = 2.0, kTipNoise = 1.5, kAngleAccel = 1.0, kAngleNoise = 2.0;
+// A split region's measurement further than this from the prediction (in standard
+// deviations of the innovation, at least one tool width) or turned by more than
+// kAngleGateDeg is another tool's part; the track coasts on its prediction instead.
+constexpr double kGateSigmas = 4.0, kAngleGateDeg = 20.0;
+
+double angle_diff_deg(double a, double b) { return std::abs(std::remainder(a - b, 360.0)); }
+
+// Distance of (x, y) to the segment a-b.
+double segment_distance(Point2 a, Point2 b, double x, double y) {
+    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+    const double t = l2 > 0 ? std::clamp(((x - a.x) * dx + (y - a.y) * dy) / l2, 0.0, 1.0) : 0.0;
+    return std::hypot(x - a.x - t * dx, y - a.y - t * dy);
+}
 
 struct Px {
     std::int16_t x, y;
@@ -118,6 +154,7 @@ struct LikelihoodToolTracker::Work {
     std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last) into entries
     std::vector<std::uint8_t> owner;                        // per region pixel: which line
     std::vector<Candidate> candidates;
+    std::array<Track, ToolTracker::kMaxTools> tracks{};
     double fov_cx = 0, fov_cy = 0, fov_r = 0;
 };
 
@@ -146,7 +183,7 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     w.entries.reserve(static_cast<std::size_t>(sw) * sh / 4);
     w.owner.reserve(static_cast<std::size_t>(sw) * sh);
     w.candidates.reserve(64);
-    for (Track& t : tracks_) t = Track{};
+    for (Track& t : w.tracks) t = Track{};
 }
 
 std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
@@ -212,6 +249,16 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         return std::min<double>({w.rim.at<float>(yi, xi), x + 1, y + 1, W - x, H - y});
     };
     w.candidates.clear();
+    const std::size_t nt = std::min(params_.max_tools, kMaxTools);
+    for (std::size_t t = 0; t < nt; ++t)
+        if (w.tracks[t].id >= 0) {
+            w.tracks[t].x.predict(kTipAccel);
+            w.tracks[t].y.predict(kTipAccel);
+            w.tracks[t].angle.predict(kAngleAccel);
+        }
+    std::array<Point2, kMaxTools> predicted{};
+    for (std::size_t t = 0; t < nt; ++t) predicted[t] = w.tracks[t].tip();
+    const bool two_tracks = nt == 2 && w.tracks[0].id >= 0 && w.tracks[1].id >= 0;
     const double min_area = params_.min_area_fraction * W * H, touch = params_.border_touch_fraction * W;
     for (int i = 1; i < n; ++i) {
         const Px* begin = w.pixels.data() + w.offsets[i];
@@ -254,19 +301,43 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         Line whole;
         fit_axis(begin, end, [](const Px*) { return true; }, whole, n_all, l1, l2);
         w.owner.assign(static_cast<std::size_t>(end - begin), 0);
-        if (lines > 1) {
-            // Two tools in one region (touching or crossing): k-lines, each started at
-            // its entry and aimed at the region's centre, then refitted to the pixels
-            // nearer to it than to the other.
+        std::array<Point2, kMaxTools> entry{};
+        for (std::size_t j = 0; j < lines; ++j) {
+            double m = 0;
+            for (std::size_t k = w.runs[j].first; k < w.runs[j].second; ++k) {
+                const RimPixel& e = w.entries[k % w.entries.size()];
+                entry[j].x += e.x, entry[j].y += e.y, m += 1;
+            }
+            entry[j] = {entry[j].x / m, entry[j].y / m};
+        }
+        // Two tracked tools in one region (touching or crossing): each entry goes to
+        // the track that came in nearest to it, and each pixel to the tool whose
+        // predicted shaft (entry to predicted tip, a segment, so a jaw beyond the other
+        // tool's tip stays with its own tool) is nearer, in units of its width.
+        std::array<int, kMaxTools> run_track{-1, -1};
+        if (lines > 1 && two_tracks) {
+            auto d = [&](std::size_t j, std::size_t t) {
+                return std::hypot(entry[j].x - w.tracks[t].rim_end.x, entry[j].y - w.tracks[t].rim_end.y);
+            };
+            const bool straight = d(0, 0) + d(1, 1) <= d(0, 1) + d(1, 0);
+            run_track = {straight ? 0 : 1, straight ? 1 : 0};
+            std::array<Point2, kMaxTools> tip{};
+            std::array<double, kMaxTools> inv_half{};
             for (std::size_t j = 0; j < lines; ++j) {
-                double ex = 0, ey = 0, m = 0;
-                for (std::size_t k = w.runs[j].first; k < w.runs[j].second; ++k) {
-                    const RimPixel& e = w.entries[k % w.entries.size()];
-                    ex += e.x, ey += e.y, m += 1;
-                }
-                ex /= m, ey /= m;
-                const double dx = whole.px - ex, dy = whole.py - ey, d = std::max(1e-9, std::hypot(dx, dy));
-                line[j] = {ex, ey, dx / d, dy / d};
+                const Track& tr = w.tracks[run_track[j]];
+                tip[j] = tr.tip();
+                inv_half[j] = 1.0;
+            }
+            for (const Px* p = begin; p != end; ++p)
+                w.owner[p - begin] = segment_distance(entry[1], tip[1], p->x, p->y) * inv_half[1] <
+                                     segment_distance(entry[0], tip[0], p->x, p->y) * inv_half[0];
+        } else if (lines > 1) {
+            // Two tools, not both tracked yet: k-lines, each started at its entry and
+            // aimed at the region's centre, then refitted to the pixels nearer to it
+            // than to the other.
+            for (std::size_t j = 0; j < lines; ++j) {
+                const double dx = whole.px - entry[j].x, dy = whole.py - entry[j].y, d = std::max(1e-9, std::hypot(dx, dy));
+                line[j] = {entry[j].x, entry[j].y, dx / d, dy / d};
             }
             for (int iter = 0; iter < 6; ++iter) {
                 for (const Px* p = begin; p != end; ++p) {
@@ -290,14 +361,32 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
             double nj = 0, a1 = 0, a2 = 0;
             Line axis;
             if (!fit_axis(begin, end, mine, axis, nj, a1, a2) || nj < (lines > 1 ? 0.5 : 1.0) * min_area) continue;
-            if (std::sqrt(a1 / a2) < params_.min_elongation) continue;
-            double lo = std::numeric_limits<double>::max(), hi = -lo, psum = 0;
+            if (run_track[j] >= 0) {
+                // A tracked tool sharing its region: its shaft keeps the predicted
+                // direction from its entry (a tool turns a fraction of a degree per
+                // frame; the shared region's shape says little about it).
+                const double a = w.tracks[run_track[j]].angle.position() * M_PI / 180.0;
+                axis = {entry[j].x, entry[j].y, -std::cos(a), -std::sin(a)};
+            } else if (std::sqrt(a1 / a2) < params_.min_elongation) {
+                continue;
+            }
+            // A tracked tool's end is not looked for under the other tool's predicted
+            // shaft (half its width about the segment from its entry to its tip): the
+            // pixels there show the other tool, whichever lies on top.
+            const int other = run_track[j] >= 0 ? run_track[1 - j] : -1;
+            auto hidden = [&](const Px* p) {
+                return other >= 0 && segment_distance(entry[1 - j], predicted[other], p->x, p->y) < 0.5 * w.tracks[other].width + 1.5;
+            };
+            double lo = std::numeric_limits<double>::max(), hi = -lo, hi_seen = -lo, psum = 0;
             for (const Px* p = begin; p != end; ++p)
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     lo = std::min(lo, t), hi = std::max(hi, t);
+                    if (!hidden(p)) hi_seen = std::max(hi_seen, t);
                     psum += w.prob.at<std::uint8_t>(p->y, p->x);
                 }
+            const bool end_hidden = other >= 0 && hi_seen > lo && hi_seen < hi;
+            if (end_hidden) hi = hi_seen;
             const double band = std::max(1.0, 0.03 * (hi - lo));
             Point2 e_lo, e_hi;
             double n_lo = 0, n_hi = 0, half_lo = 0;
@@ -306,7 +395,7 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     if (t <= lo + band) e_lo.x += p->x, e_lo.y += p->y, n_lo += 1;
-                    if (t >= hi - band) e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
+                    if (t >= hi - band && t <= hi && !(end_hidden && hidden(p))) e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
                     half_lo += t < mid;
                 }
             e_lo = {e_lo.x / n_lo, e_lo.y / n_lo};
@@ -355,68 +444,123 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
                 out = {at(lo), at(hi)};
                 return true;
             };
-            c.has_edges = fit_side(s_min, c.e1) && fit_side(s_max, c.e2);
+            c.has_edges = run_track[j] < 0 && fit_side(s_min, c.e1) && fit_side(s_max, c.e2);
             c.confidence = std::clamp(psum / nj / 255.0, 0.0, 1.0);
+            c.split = lines > 1;
+            c.end_hidden = end_hidden;
+            c.track = run_track[j];
+            c.axis_deg = c.track >= 0 ? std::remainder(w.tracks[c.track].angle.position(), 360.0)
+                                      : std::atan2(c.rim_end.y - c.tip.y, c.rim_end.x - c.tip.x) * 180.0 / M_PI;
             w.candidates.push_back(c);
         }
     }
     std::sort(w.candidates.begin(), w.candidates.end(), [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
     const std::size_t found = std::min({w.candidates.size(), params_.max_tools, kMaxTools});
 
-    // Identities: the assignment of candidates to live tracks with the least summed tip distance.
+    // Identities: candidates to live tracks, the assignment of least summed cost (tip
+    // distance to the prediction in widths, plus the turn of the axis in units of
+    // kAngleGateDeg); a candidate cut out by a track's prediction belongs to it.
     std::array<int, kMaxTools> track_of{-1, -1};
+    auto pair_cost = [&](const Candidate& c, std::size_t t) {
+        const Track& tr = w.tracks[t];
+        if (c.track >= 0 && static_cast<std::size_t>(c.track) != t) return 1e9;
+        const double a = c.axis_deg;
+        return std::hypot(c.tip.x - tr.x.position(), c.tip.y - tr.y.position()) / std::max(2.0, tr.width) +
+               angle_diff_deg(a, tr.angle.position()) / kAngleGateDeg;
+    };
     double best = std::numeric_limits<double>::max();
-    const std::size_t nt = std::min(params_.max_tools, kMaxTools);
-    for (int perm = 0; perm < 2; ++perm) {
+    for (int perm = 0; perm < (nt < 2 ? 1 : 2); ++perm) {
         std::array<int, kMaxTools> pick{-1, -1};
         double cost = 0;
         for (std::size_t k = 0; k < found; ++k) {
             const std::size_t t = perm == 0 ? k : (nt - 1 - k);
-            if (t >= nt || tracks_[t].id < 0) continue;
+            if (t >= nt || w.tracks[t].id < 0) {
+                cost += 1e6;  // a new track: dearer than any match that is allowed
+                continue;
+            }
             pick[k] = static_cast<int>(t);
-            cost += std::hypot(w.candidates[k].tip.x - tracks_[t].tip.x, w.candidates[k].tip.y - tracks_[t].tip.y);
+            cost += pair_cost(w.candidates[k], t);
         }
         if (cost < best) best = cost, track_of = pick;
-        if (nt < 2) break;
     }
-    std::array<bool, kMaxTools> used{false, false};
+    std::array<bool, kMaxTools> used{false, false}, fresh{false, false};
     for (std::size_t k = 0; k < found; ++k)
         if (track_of[k] >= 0) used[track_of[k]] = true;
     for (std::size_t k = 0; k < found; ++k) {
         if (track_of[k] >= 0) continue;
-        for (std::size_t t = 0; t < nt; ++t)
-            if (!used[t] && tracks_[t].id < 0) {
-                track_of[k] = static_cast<int>(t), used[t] = true;
-                tracks_[t].id = next_id_++;
-                break;
-            }
-        if (track_of[k] < 0)  // both tracks live but unmatched: take the stalest
-            for (std::size_t t = 0; t < nt; ++t)
-                if (!used[t]) {
-                    track_of[k] = static_cast<int>(t), used[t] = true;
-                    tracks_[t].id = next_id_++;
-                    break;
+        // A free track, else (both live but unmatched) the unused one.
+        for (int pass = 0; pass < 2 && track_of[k] < 0; ++pass)
+            for (std::size_t t = 0; t < nt && track_of[k] < 0; ++t)
+                if (!used[t] && (pass == 1 || w.tracks[t].id < 0)) {
+                    track_of[k] = static_cast<int>(t), used[t] = true, fresh[t] = true;
+                    w.tracks[t] = Track{};
+                    w.tracks[t].id = next_id_++;
                 }
     }
     for (std::size_t t = 0; t < nt; ++t)
-        if (!used[t] && tracks_[t].id >= 0 && ++tracks_[t].missed > params_.keep_frames) tracks_[t] = Track{};
+        if (!used[t] && w.tracks[t].id >= 0 && ++w.tracks[t].missed > params_.keep_frames) w.tracks[t] = Track{};
 
     const double inv = 1.0 / w.scale;
     std::size_t count = 0;
     for (std::size_t k = 0; k < found; ++k) {
         const Candidate& c = w.candidates[k];
-        Track& t = tracks_[track_of[k]];
-        t.tip = c.tip;
+        Track& t = w.tracks[track_of[k]];
+        const double measured_deg = c.axis_deg;
+        Point2 tip = c.tip;  // the measurement, or where it says the tip is at least
+        bool coast = false;
+        if (fresh[track_of[k]]) {
+            t.x.reset(tip.x), t.y.reset(tip.y), t.angle.reset(measured_deg);
+        } else {
+            const double pa = t.angle.position(), za = pa + std::remainder(measured_deg - pa, 360.0);
+            if (c.split && t.coasted < params_.max_coast_frames) {
+                // Where this tool runs under the other one's predicted shaft, the end
+                // seen is where it disappears: the tip is at least that far from the
+                // rim, not nearer (the lateral position still counts).
+                if (c.end_hidden) {
+                    const double ux = std::cos(pa * M_PI / 180.0), uy = std::sin(pa * M_PI / 180.0);
+                    const double along = (tip.x - predicted[track_of[k]].x) * ux + (tip.y - predicted[track_of[k]].y) * uy;
+                    if (along > 0) tip.x -= along * ux, tip.y -= along * uy;
+                }
+                // A part of a shared region that jumped away from the prediction belongs
+                // to the other tool (a jaw across its shaft); the track coasts. The gate:
+                // at least a width, at most two (the book's tolerance) however long it coasted.
+                const double s = std::sqrt(std::max(t.x.innovation_var(kTipNoise), t.y.innovation_var(kTipNoise)));
+                const double gate = std::clamp(kGateSigmas * s, t.width, 2 * t.width);
+                coast = std::hypot(tip.x - t.x.position(), tip.y - t.y.position()) > gate || std::abs(za - pa) > kAngleGateDeg;
+            }
+            if (!coast) {
+                t.x.update(tip.x, kTipNoise), t.y.update(tip.y, kTipNoise);
+                if (c.track < 0) t.angle.update(za, kAngleNoise);  // else the prediction itself
+            }
+        }
         t.missed = 0;
-        const double dx = c.rim_end.x - c.tip.x, dy = c.rim_end.y - c.tip.y, len = std::max(1e-9, std::hypot(dx, dy));
+        t.coasted = coast ? t.coasted + 1 : 0;
+        if (!coast) {
+            t.rim_end = c.rim_end;
+            if (!c.split || t.width <= 0) t.width = c.width;
+            t.confidence = c.confidence;
+        }
         ToolEstimate& e = out[count++];
         e = ToolEstimate{};
         e.id = t.id;
         e.present = true;
-        e.tip = {c.tip.x * inv, c.tip.y * inv};
-        e.head = {(c.tip.x + dx / len * params_.head_widths * c.width) * inv,
-                  (c.tip.y + dy / len * params_.head_widths * c.width) * inv};
-        e.axis_deg = std::atan2(dy, dx) * 180.0 / M_PI;
+        if (coast) {
+            // The prediction, at half the last confidence; no edges, so no 3-D pose.
+            const double a = t.angle.position() * M_PI / 180.0, ux = std::cos(a), uy = std::sin(a);
+            tip = t.tip();
+            e.tip = {tip.x * inv, tip.y * inv};
+            e.head = {(tip.x + ux * params_.head_widths * t.width) * inv, (tip.y + uy * params_.head_widths * t.width) * inv};
+            e.axis_deg = std::remainder(t.angle.position(), 360.0);
+            e.width_px = t.width * inv;
+            e.confidence = 0.5 * t.confidence;
+            e.edges.midline = {e.tip, {t.rim_end.x * inv, t.rim_end.y * inv}};
+            continue;
+        }
+        const double dx = std::cos(c.axis_deg * M_PI / 180.0), dy = std::sin(c.axis_deg * M_PI / 180.0), len = 1.0;
+        e.tip = {tip.x * inv, tip.y * inv};
+        e.head = {(tip.x + dx / len * params_.head_widths * c.width) * inv,
+                  (tip.y + dy / len * params_.head_widths * c.width) * inv};
+        e.axis_deg = c.axis_deg;
         e.width_px = c.width * inv;
         e.confidence = c.confidence;
         e.edges.found = c.has_edges;

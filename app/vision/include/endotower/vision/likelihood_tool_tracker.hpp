@@ -42,6 +42,7 @@ struct LikelihoodToolTrackerParams {
     double min_entry_ratio = 0.2;  // a second rim entry counts when >= this x the first
     double head_widths = 2.7;  // median on simulator training scenes (docs/tracking.md)
     int keep_frames = 5;
+    int max_coast_frames = 25;  // a crossing at 3 cm/s takes about a second
     std::size_t max_tools = 2;
 };
 
@@ -55,14 +56,9 @@ public:
 
 private:
     struct Work;
-    struct Track {
-        int id = -1, missed = 0;
-        Point2 tip;
-    };
     ToolLikelihood model_;
     LikelihoodToolTrackerParams params_;
     std::unique_ptr<Work> work_;
-    std::array<Track, kMaxTools> tracks_{};
     int next_id_ = 0;
 };
 
