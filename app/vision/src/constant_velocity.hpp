@@ -11,7 +11,9 @@ namespace endotower::vision {
 
 class ConstantVelocity {
 public:
-    void reset(double position) { x_ = position, v_ = 0, p00_ = 0, p01_ = 0, p11_ = kInitialVelocityVar; }
+    void reset(double position) {
+        x_ = position, v_ = 0, p00_ = 0, p01_ = 0, p11_ = kInitialVelocityVar;
+    }
     void predict(double accel) {
         const double q = accel * accel;
         x_ += v_;
