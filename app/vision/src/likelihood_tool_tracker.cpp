@@ -106,10 +106,10 @@ double grey_at(const cv::Mat& img, double x, double y) {
 }
 
 // Moves a coarse silhouette edge (full-resolution px) onto the image's strongest
-// grey-level step within `reach` px along its normal, at `samples` points of its
-// first `extent` (0..1, from a): a line through the sub-pixel steps (parabola fit
-// of the gradient peak), or the coarse edge where too few steps are found.
-Segment refine_edge(const cv::Mat& img, const Segment& e, double extent, double reach) {
+// step within `reach` px along its normal, at 16 points between `begin` and `end`
+// (0..1, from a): a line through the sub-pixel steps (parabola fit of the gradient
+// peak), or the coarse edge where too few steps are found.
+Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double end, double reach) {
     constexpr int kSamples = 16;
     const double dx = e.b.x - e.a.x, dy = e.b.y - e.a.y, len = std::hypot(dx, dy);
     if (len < 4) return e;
@@ -118,7 +118,7 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double extent, double 
     int n = 0;
     const int steps = static_cast<int>(std::ceil(reach));
     for (int k = 0; k < kSamples; ++k) {
-        const double t = (0.2 + 0.8 * (k + 0.5) / kSamples) * extent * len;
+        const double t = (begin + (end - begin) * (k + 0.5) / kSamples) * len;
         const double px = e.a.x + t * ux, py = e.a.y + t * uy;
         double best = 0;
         int at = 0;
@@ -630,8 +630,12 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
                               std::hypot(c.e1.b.x - c.tip.x, c.e1.b.y - c.tip.y);
         auto from_tip = [tip_at_a](Segment s) { return tip_at_a ? s : Segment{s.b, s.a}; };
         if (c.has_edges) {
-            e.edges.e1 = refine_edge(full, from_tip(scaled(c.e1)), 1.0, 2.5 * inv);
-            e.edges.e2 = refine_edge(full, from_tip(scaled(c.e2)), 1.0, 2.5 * inv);
+            // Only the shaft: from a width past the head (the jaws are narrower and
+            // would pull the lines together, making the tool look further away).
+            const double shaft_from =
+                std::clamp((params_.head_widths + 1) * c.width / c.length, 0.2, 0.8);
+            e.edges.e1 = refine_edge(full, from_tip(scaled(c.e1)), shaft_from, 1.0, 2.5 * inv);
+            e.edges.e2 = refine_edge(full, from_tip(scaled(c.e2)), shaft_from, 1.0, 2.5 * inv);
         }
         e.edges.midline = {e.tip, {c.rim_end.x * inv, c.rim_end.y * inv}};
     }
