@@ -271,6 +271,32 @@ TEST(LikelihoodToolTracker, GrasperJawsAcrossAThinToolKeepIdentities) {
     EXPECT_NE(ids[0], ids[1]);
 }
 
+// Bad input (issue 5): black, saturated and tool-free frames give no tool, not a
+// guess; when the tool comes back it is found in its first frame (re-acquisition
+// takes 0 frames), tip within its width.
+TEST(LikelihoodToolTracker, NoToolOnBadFramesAndReacquiresAtOnce) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    const Shaft s{{330, 220}, 160, 24};
+    cv::Mat tool = scope_frame({s});
+    tracker.configure(view(tool).format);
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    ASSERT_EQ(tracker.track(view(tool), out), 1u);
+    cv::Mat black(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
+    cv::Mat white(480, 640, CV_8UC3, cv::Scalar(255, 255, 255));
+    cv::Mat tissue = scope_frame({});
+    cv::Mat noise(480, 640, CV_8UC3);
+    cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(256));
+    for (int k = 0; k < 3; ++k)
+        for (cv::Mat* bad : {&black, &white, &tissue, &noise}) {
+            out = {};
+            EXPECT_EQ(tracker.track(view(*bad), out), 0u) << k;
+        }
+    out = {};
+    ASSERT_EQ(tracker.track(view(tool), out), 1u);
+    EXPECT_LT(std::hypot(out[0].tip.x - s.tip.x, out[0].tip.y - s.tip.y), s.width);
+    EXPECT_LT(angle_diff(out[0].axis_deg, s.dir_deg), 2.0);
+}
+
 TEST(LikelihoodToolTracker, IgnoresGreyThatDoesNotEnterFromTheRim) {
     LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
     cv::Mat img = scope_frame({});
