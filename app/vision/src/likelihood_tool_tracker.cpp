@@ -444,6 +444,9 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             e_hi = {e_hi.x / n_hi, e_hi.y / n_hi};
             const double d_lo = rim_distance(e_lo.x, e_lo.y), d_hi = rim_distance(e_hi.x, e_hi.y);
             if (std::min(d_lo, d_hi) > touch) continue;  // this part does not reach the rim
+            // Both ends at the rim: it lies along the edge of the picture (a caption
+            // band, the rim's own glare) instead of coming in through it.
+            if (std::max(d_lo, d_hi) <= touch) continue;
             Candidate c;
             c.area = nj;
             c.length = std::max(1.0, hi - lo);

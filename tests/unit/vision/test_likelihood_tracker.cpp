@@ -297,6 +297,17 @@ TEST(LikelihoodToolTracker, NoToolOnBadFramesAndReacquiresAtOnce) {
     EXPECT_LT(angle_diff(out[0].axis_deg, s.dir_deg), 2.0);
 }
 
+// A grey band lying along the edge of the picture (a caption strip, glare on the
+// scope's rim) touches the rim at both ends: it does not come in, it is no tool.
+TEST(LikelihoodToolTracker, IgnoresGreyLyingAlongTheRim) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    cv::Mat img = scope_frame({});
+    cv::ellipse(img, {320, 240}, {218, 218}, 0, 200, 250, cv::Scalar(128, 126, 124), 16);
+    tracker.configure(view(img).format);
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    EXPECT_EQ(tracker.track(view(img), out), 0u);
+}
+
 TEST(LikelihoodToolTracker, IgnoresGreyThatDoesNotEnterFromTheRim) {
     LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
     cv::Mat img = scope_frame({});
