@@ -340,7 +340,8 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
         // Two tracked tools in one region (touching or crossing): each entry goes to
         // the track that came in nearest to it, and each pixel to the tool whose
         // predicted shaft (entry to predicted tip, a segment, so a jaw beyond the other
-        // tool's tip stays with its own tool) is nearer, in units of its width.
+        // tool's tip stays with its own tool) is nearer. In px, not in widths: a wide
+        // tool's open jaws would otherwise claim the thin tool's tip.
         std::array<int, kMaxTools> run_track{-1, -1};
         if (lines > 1 && two_tracks) {
             auto d = [&](std::size_t j, std::size_t t) {
@@ -349,16 +350,10 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             };
             const bool straight = d(0, 0) + d(1, 1) <= d(0, 1) + d(1, 0);
             run_track = {straight ? 0 : 1, straight ? 1 : 0};
-            std::array<Point2, kMaxTools> tip{};
-            std::array<double, kMaxTools> inv_half{};
-            for (std::size_t j = 0; j < lines; ++j) {
-                const Track& tr = w.tracks[run_track[j]];
-                tip[j] = tr.tip();
-                inv_half[j] = 1.0;
-            }
+            const Point2 tip0 = predicted[run_track[0]], tip1 = predicted[run_track[1]];
             for (const Px* p = begin; p != end; ++p)
-                w.owner[p - begin] = segment_distance(entry[1], tip[1], p->x, p->y) * inv_half[1] <
-                                     segment_distance(entry[0], tip[0], p->x, p->y) * inv_half[0];
+                w.owner[p - begin] = segment_distance(entry[1], tip1, p->x, p->y) <
+                                     segment_distance(entry[0], tip0, p->x, p->y);
         } else if (lines > 1) {
             // Two tools, not both tracked yet: k-lines, each started at its entry and
             // aimed at the region's centre, then refitted to the pixels nearer to it
