@@ -7,12 +7,13 @@
 // (12), eroded by `surround_margin_px`); a 5x5 Gaussian; threshold at
 // `threshold` (128 = even odds); a 3x3 opening; 8-connected regions. A region is a tool
 // when its area is at least `min_area_fraction` of the frame, its length (principal
-// axis, from the second moments) at least `min_elongation` x its width, and one end
-// lies within `border_touch_fraction` x the frame width of the edge of the lit area or
-// the image border (tools come in through the incision, from outside the picture).
-// Where one region meets the rim in two places (two tools touching or crossing), it is
-// split by two lines fitted alternately to the pixels nearer each (k-lines), when the
-// smaller entry is at least `min_entry_ratio` (0.2) of the larger. The
+// axis, from the second moments) at least `min_elongation` x its width, and one end,
+// not both, lies within `border_touch_fraction` x the frame width of the edge of the
+// lit area or the image border (tools come in through the incision; a band with both
+// ends there lies along the edge). Where one region meets the rim in two places (two
+// tools touching or crossing) and not both are tracked, it is split by two lines
+// fitted alternately to the pixels nearer each (k-lines), when the smaller entry is
+// at least `min_entry_ratio` (0.2) of the larger. The
 // larger regions win, up to `max_tools`.
 // Per tool: the tip is the end away from the rim (mean of the region's pixels within
 // 3 % of the length of that extreme); axis_deg points from the tip to the rim end;
