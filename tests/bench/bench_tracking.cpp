@@ -18,8 +18,8 @@ using namespace endotower;
 
 // Tracks the frames round-robin, one per iteration; median and p99 per frame, and the
 // fraction of frames where a tool was found.
-void time_tracking(benchmark::State& state, vision::ToolTracker& tracker, const std::vector<cv::Mat>& frames,
-                   const hal::FrameFormat& fmt) {
+void time_tracking(benchmark::State& state, vision::ToolTracker& tracker,
+                   const std::vector<cv::Mat>& frames, const hal::FrameFormat& fmt) {
     std::array<vision::ToolEstimate, vision::ToolTracker::kMaxTools> out{};
     std::vector<double> ms;
     ms.reserve(100000);
@@ -30,7 +30,9 @@ void time_tracking(benchmark::State& state, vision::ToolTracker& tracker, const 
         f.data = frames[i++ % frames.size()].data;
         const auto t0 = std::chrono::steady_clock::now();
         found += tracker.track(f, out);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
     }
     std::sort(ms.begin(), ms.end());
     state.counters["median_ms"] = ms[ms.size() / 2];
@@ -42,7 +44,8 @@ cv::Mat frame_1080p(int t) {
     cv::Mat img(1080, 1920, CV_8UC3);
     cv::randn(img, cv::Scalar(85, 75, 185), cv::Scalar(8, 8, 8));
     const double ang = (-20.0 + t % 20) * M_PI / 180.0;
-    const cv::Point2d entry(-40, 600), tip(entry.x + 1000 * std::cos(ang), entry.y + 1000 * std::sin(ang));
+    const cv::Point2d entry(-40, 600),
+        tip(entry.x + 1000 * std::cos(ang), entry.y + 1000 * std::sin(ang));
     cv::line(img, entry, tip, cv::Scalar(50, 48, 52), 80, cv::LINE_AA);
     return img;
 }
@@ -60,11 +63,14 @@ void BM_KalmanTracker1080p(benchmark::State& state) {
 BENCHMARK(BM_KalmanTracker1080p)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 // The likelihood tracker with the shipped model, on a scope-like frame: black
-// surround, red tissue in the lit circle, a grey shaft entering from the rim.
+// surround, red tissue in the lit circle, a grey shaft entering from the rim; with
+// Arg 2 a second shaft from the lower right whose tip sweeps across the first one
+// (separate, touching, crossing: the two-tool goal).
 void BM_LikelihoodTracker1080p(benchmark::State& state) {
     vision::ToolLikelihood model;
     std::string error;
-    if (!model.load(std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/models/tool_likelihood.bin", error)) {
+    if (!model.load(std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/models/tool_likelihood.bin",
+                    error)) {
         state.SkipWithError(error.c_str());
         return;
     }
@@ -73,20 +79,26 @@ void BM_LikelihoodTracker1080p(benchmark::State& state) {
     tracker.configure(fmt);
     std::vector<cv::Mat> frames;
     for (int t = 0; t < 20; ++t) {
-        cv::Mat img(1080, 1920, CV_8UC3, cv::Scalar(0, 0, 0)), tissue(1080, 1920, CV_8UC3), circle(1080, 1920, CV_8U, cv::Scalar(0));
+        cv::Mat img(1080, 1920, CV_8UC3, cv::Scalar(0, 0, 0)), tissue(1080, 1920, CV_8UC3),
+            circle(1080, 1920, CV_8U, cv::Scalar(0));
         cv::randn(tissue, cv::Scalar(60, 50, 190), cv::Scalar(8, 8, 8));
         cv::circle(circle, {960, 540}, 520, cv::Scalar(255), -1);
         tissue.copyTo(img, circle);
         const double ang = (-20.0 + t) * M_PI / 180.0;
-        const cv::Point2d entry(400, 700), tip(entry.x + 700 * std::cos(ang), entry.y + 700 * std::sin(ang));
+        const cv::Point2d entry(400, 700),
+            tip(entry.x + 700 * std::cos(ang), entry.y + 700 * std::sin(ang));
         cv::Mat bar(1080, 1920, CV_8U, cv::Scalar(0));
         cv::line(bar, entry - (tip - entry), tip, cv::Scalar(255), 60, cv::LINE_AA);
+        if (state.range(0) == 2) {
+            const cv::Point2d entry2(1500, 900), tip2(1100 - 12 * t, 520 - 4 * t);
+            cv::line(bar, entry2 - (tip2 - entry2), tip2, cv::Scalar(255), 44, cv::LINE_AA);
+        }
         img.setTo(cv::Scalar(128, 126, 124), bar & circle);
         frames.push_back(img);
     }
     time_tracking(state, tracker, frames, fmt);
 }
-BENCHMARK(BM_LikelihoodTracker1080p)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_LikelihoodTracker1080p)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 }  // namespace
 

@@ -271,12 +271,13 @@ TEST(Replay, DefaultTrackerMeetsTheGoalOnAnUnseenSimulatorSuite) {
 }
 
 // With a calibration of the simulated scope (its exact intrinsics and distortion,
-// as OpenCV's pinhole model), every tool gets a 3-D tip. The goal is <= 3 mm;
-// measured 6.2 mm mean at 67-78 mm (docs/tracking.md): this bounds a regression.
+// as OpenCV's pinhole model), every tool gets a 3-D tip. The goal: <= 3 mm
+// mean at 30-70 mm; `pose_depth_30_70` moves the tip from 35 to 65 mm in these 30
+// frames (measured 1.7 mm mean over its 50, docs/tracking.md).
 TEST(Replay, CalibratedScopeGivesTheToolTipInMillimetres) {
     const fs::path d = fresh_dir("pose");
     CommandResult r = run(std::string("scene --scenario ") + ENDOTOWER_SOURCE_DIR +
-                          "/board/sim/scenarios/t41_speed_0_4.yaml --frames 20 --out " + (d / "scene").string());
+                          "/board/sim/scenarios/pose_depth_30_70.yaml --frames 30 --out " + (d / "scene").string());
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream truth(d / "scene" / "truth.jsonl");
     std::string line;
@@ -296,10 +297,10 @@ TEST(Replay, CalibratedScopeGivesTheToolTipInMillimetres) {
             " --events '' --out '' --frames " + (d / "out").string() + " --trace " + (d / "t.jsonl").string());
     ASSERT_EQ(r.status, 0) << r.output;
     r = run("eval --trace " + (d / "t.jsonl").string() + " --truth " + (d / "scene" / "truth.jsonl").string() +
-            " --min-success 0.97 --max-tip-error-mm 10");
+            " --min-success 0.97 --max-tip-error-mm 3");
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("3-D tip error mean"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("(20)"), std::string::npos) << "every frame has a 3-D tip: " << r.output;
+    EXPECT_NE(r.output.find("(30)"), std::string::npos) << "every frame has a 3-D tip: " << r.output;
 }
 
 TEST(Cli, HelpAndVersion) {

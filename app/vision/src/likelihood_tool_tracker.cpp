@@ -8,16 +8,54 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "constant_velocity.hpp"
+
 namespace endotower::vision {
 
 namespace {
 
 struct Candidate {
     double area = 0, length = 0, width = 0, shaft_width = 0, confidence = 0;
+    double axis_deg = 0;  // from the tip towards the rim
     Point2 tip, rim_end;
     bool has_edges = false;
+    bool split = false;       // cut from a region shared with another tool
+    bool end_hidden = false;  // its far end runs under the other tool
+    int track = -1;           // the track whose prediction cut it out, or -1
     Segment e1, e2;
 };
+
+// One tool over time (analysis px; angles in degrees from the tip towards the rim,
+// unwrapped): constant-velocity filters on the tip and the axis angle.
+struct Track {
+    int id = -1, missed = 0, coasted = 0;
+    double width = 0, confidence = 0;
+    Point2 rim_end;
+    ConstantVelocity x, y, angle;
+    Point2 tip() const { return {x.position(), y.position()}; }
+};
+
+// Process and measurement noise of the track filters (analysis px, degrees, per
+// frame). They matter only where two tools share a region (a single tool's own
+// measurement is always taken): a hand changes a tool's speed by a few px per frame
+// (the simulator's crossing moves 2 analysis px per frame at 3 cm/s); the measurement
+// noise is the tip's spread on a still tool.
+constexpr double kTipAccel = 2.0, kTipNoise = 1.5, kAngleAccel = 1.0, kAngleNoise = 2.0;
+// A split region's measurement further than this from the prediction (in standard
+// deviations of the innovation, at least one tool width) or turned by more than
+// kAngleGateDeg is another tool's part; the track coasts on its prediction instead.
+constexpr double kGateSigmas = 4.0, kAngleGateDeg = 20.0;
+
+double angle_diff_deg(double a, double b) {
+    return std::abs(std::remainder(a - b, 360.0));
+}
+
+// Distance of (x, y) to the segment a-b.
+double segment_distance(Point2 a, Point2 b, double x, double y) {
+    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+    const double t = l2 > 0 ? std::clamp(((x - a.x) * dx + (y - a.y) * dy) / l2, 0.0, 1.0) : 0.0;
+    return std::hypot(x - a.x - t * dx, y - a.y - t * dy);
+}
 
 struct Px {
     std::int16_t x, y;
@@ -34,12 +72,14 @@ struct Line {
 
 // Principal axis of weighted points; false when there are fewer than 3.
 template <typename Pred>
-bool fit_axis(const Px* begin, const Px* end, Pred use, Line& out, double& n, double& l1, double& l2) {
+bool fit_axis(const Px* begin, const Px* end, Pred use, Line& out, double& n, double& l1,
+              double& l2) {
     double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
     n = 0;
     for (const Px* p = begin; p != end; ++p) {
         if (!use(p)) continue;
-        n += 1, sx += p->x, sy += p->y, sxx += double(p->x) * p->x, syy += double(p->y) * p->y, sxy += double(p->x) * p->y;
+        n += 1, sx += p->x, sy += p->y, sxx += double(p->x) * p->x, syy += double(p->y) * p->y,
+            sxy += double(p->x) * p->y;
     }
     if (n < 3) return false;
     const double mx = sx / n, my = sy / n;
@@ -61,14 +101,15 @@ double grey_at(const cv::Mat& img, double x, double y) {
         const std::uint8_t* p = img.ptr<std::uint8_t>(yy) + 3 * xx;
         return (p[0] + p[1] + p[2]) / 3.0;
     };
-    return (1 - fy) * ((1 - fx) * g(x0, y0) + fx * g(x0 + 1, y0)) + fy * ((1 - fx) * g(x0, y0 + 1) + fx * g(x0 + 1, y0 + 1));
+    return (1 - fy) * ((1 - fx) * g(x0, y0) + fx * g(x0 + 1, y0)) +
+           fy * ((1 - fx) * g(x0, y0 + 1) + fx * g(x0 + 1, y0 + 1));
 }
 
 // Moves a coarse silhouette edge (full-resolution px) onto the image's strongest
-// grey-level step within `reach` px along its normal, at `samples` points of its
-// first `extent` (0..1, from a): a line through the sub-pixel steps (parabola fit
-// of the gradient peak), or the coarse edge where too few steps are found.
-Segment refine_edge(const cv::Mat& img, const Segment& e, double extent, double reach) {
+// step within `reach` px along its normal, at 16 points between `begin` and `end`
+// (0..1, from a): a line through the sub-pixel steps (parabola fit of the gradient
+// peak), or the coarse edge where too few steps are found.
+Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double end, double reach) {
     constexpr int kSamples = 16;
     const double dx = e.b.x - e.a.x, dy = e.b.y - e.a.y, len = std::hypot(dx, dy);
     if (len < 4) return e;
@@ -77,7 +118,7 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double extent, double 
     int n = 0;
     const int steps = static_cast<int>(std::ceil(reach));
     for (int k = 0; k < kSamples; ++k) {
-        const double t = (0.2 + 0.8 * (k + 0.5) / kSamples) * extent * len;
+        const double t = (begin + (end - begin) * (k + 0.5) / kSamples) * len;
         const double px = e.a.x + t * ux, py = e.a.y + t * uy;
         double best = 0;
         int at = 0;
@@ -97,9 +138,11 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double extent, double 
     }
     if (n < 6) return e;
     double st = 0, so = 0, stt = 0, sto = 0;
-    for (int k = 0; k < n; ++k) st += ts[k], so += os[k], stt += ts[k] * ts[k], sto += ts[k] * os[k];
+    for (int k = 0; k < n; ++k)
+        st += ts[k], so += os[k], stt += ts[k] * ts[k], sto += ts[k] * os[k];
     const double den = n * stt - st * st;
-    const double slope = std::abs(den) > 1e-9 ? (n * sto - st * so) / den : 0, icpt = (so - slope * st) / n;
+    const double slope = std::abs(den) > 1e-9 ? (n * sto - st * so) / den : 0,
+                 icpt = (so - slope * st) / n;
     auto at_t = [&](double t) {
         const double o = icpt + slope * t;
         return Point2{e.a.x + t * ux + o * nx, e.a.y + t * uy + o * ny};
@@ -118,10 +161,12 @@ struct LikelihoodToolTracker::Work {
     std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last) into entries
     std::vector<std::uint8_t> owner;                        // per region pixel: which line
     std::vector<Candidate> candidates;
+    std::array<Track, ToolTracker::kMaxTools> tracks{};
     double fov_cx = 0, fov_cy = 0, fov_r = 0;
 };
 
-LikelihoodToolTracker::LikelihoodToolTracker(const ToolLikelihood& model, LikelihoodToolTrackerParams params)
+LikelihoodToolTracker::LikelihoodToolTracker(const ToolLikelihood& model,
+                                             LikelihoodToolTrackerParams params)
     : model_(model), params_(params), work_(std::make_unique<Work>()) {}
 LikelihoodToolTracker::~LikelihoodToolTracker() = default;
 
@@ -146,15 +191,21 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     w.entries.reserve(static_cast<std::size_t>(sw) * sh / 4);
     w.owner.reserve(static_cast<std::size_t>(sw) * sh);
     w.candidates.reserve(64);
-    for (Track& t : tracks_) t = Track{};
+    for (Track& t : w.tracks) t = Track{};
 }
 
-std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
+std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
+                                         std::span<ToolEstimate, kMaxTools> out) {
     Work& w = *work_;
-    if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty() || !model_.trained()) return 0;
-    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
-    if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
-    else full.copyTo(w.small);
+    if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty() ||
+        !model_.trained())
+        return 0;
+    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
+                       frame.format.stride);
+    if (w.scale < 1.0)
+        cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
+    else
+        full.copyTo(w.small);
     const int W = w.small.cols, H = w.small.rows;
 
     // Probability per pixel; brightness histogram for the field of view.
@@ -175,7 +226,8 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
     // lit area stays inside it.
     int median = 0;
     for (int acc = 0; median < 255 && (acc += hist[median]) < W * H / 2;) ++median;
-    const double level = std::max<double>(params_.surround_level, params_.surround_fraction * median);
+    const double level =
+        std::max<double>(params_.surround_level, params_.surround_fraction * median);
     cv::blur(w.gray, w.gray, cv::Size(9, 9));
     cv::threshold(w.gray, w.lit, level, 255, cv::THRESH_BINARY);
     const cv::Moments fov = cv::moments(w.lit, true);
@@ -204,15 +256,29 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
     for (int y = 0; y < H; ++y) {
         const int* l = w.labels.ptr<int>(y);
         for (int x = 0; x < W; ++x)
-            if (l[x] != 0) w.pixels[w.fill[l[x]]++] = {static_cast<std::int16_t>(x), static_cast<std::int16_t>(y)};
+            if (l[x] != 0)
+                w.pixels[w.fill[l[x]]++] = {static_cast<std::int16_t>(x),
+                                            static_cast<std::int16_t>(y)};
     }
     // Distance of a point to the edge of the picture: the lit circle or the frame.
     auto rim_distance = [&](double x, double y) {
-        const int xi = std::clamp(static_cast<int>(x + 0.5), 0, W - 1), yi = std::clamp(static_cast<int>(y + 0.5), 0, H - 1);
+        const int xi = std::clamp(static_cast<int>(x + 0.5), 0, W - 1),
+                  yi = std::clamp(static_cast<int>(y + 0.5), 0, H - 1);
         return std::min<double>({w.rim.at<float>(yi, xi), x + 1, y + 1, W - x, H - y});
     };
     w.candidates.clear();
-    const double min_area = params_.min_area_fraction * W * H, touch = params_.border_touch_fraction * W;
+    const std::size_t nt = std::min(params_.max_tools, kMaxTools);
+    for (std::size_t t = 0; t < nt; ++t)
+        if (w.tracks[t].id >= 0) {
+            w.tracks[t].x.predict(kTipAccel);
+            w.tracks[t].y.predict(kTipAccel);
+            w.tracks[t].angle.predict(kAngleAccel);
+        }
+    std::array<Point2, kMaxTools> predicted{};
+    for (std::size_t t = 0; t < nt; ++t) predicted[t] = w.tracks[t].tip();
+    const bool two_tracks = nt == 2 && w.tracks[0].id >= 0 && w.tracks[1].id >= 0;
+    const double min_area = params_.min_area_fraction * W * H,
+                 touch = params_.border_touch_fraction * W;
     for (int i = 1; i < n; ++i) {
         const Px* begin = w.pixels.data() + w.offsets[i];
         const Px* end = w.pixels.data() + w.offsets[i + 1];
@@ -222,9 +288,11 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         w.entries.clear();
         for (const Px* p = begin; p != end; ++p)
             if (rim_distance(p->x, p->y) <= touch)
-                w.entries.push_back({std::atan2(p->y - w.fov_cy, p->x - w.fov_cx), double(p->x), double(p->y)});
+                w.entries.push_back(
+                    {std::atan2(p->y - w.fov_cy, p->x - w.fov_cx), double(p->x), double(p->y)});
         if (w.entries.empty()) continue;  // not entering from outside the picture
-        std::sort(w.entries.begin(), w.entries.end(), [](const RimPixel& a, const RimPixel& b) { return a.angle < b.angle; });
+        std::sort(w.entries.begin(), w.entries.end(),
+                  [](const RimPixel& a, const RimPixel& b) { return a.angle < b.angle; });
         // Runs of entry pixels: a gap along the rim longer than `touch` starts a new one.
         const double gap = touch / std::max(1.0, w.fov_r);
         w.runs.clear();
@@ -236,49 +304,79 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
             }
         // The runs either side of -pi/pi are one entry: [last.first, size + first.second),
         // read modulo the entry count.
-        if (w.runs.size() > 1 && w.entries.front().angle + 2 * M_PI - w.entries.back().angle <= gap) {
+        if (w.runs.size() > 1 &&
+            w.entries.front().angle + 2 * M_PI - w.entries.back().angle <= gap) {
             w.runs.front() = {w.runs.back().first, w.entries.size() + w.runs.front().second};
             w.runs.pop_back();
         }
-        auto run_size = [](const std::pair<std::size_t, std::size_t>& r) { return r.second - r.first; };
-        std::sort(w.runs.begin(), w.runs.end(), [&](const auto& a, const auto& b) { return run_size(a) > run_size(b); });
+        auto run_size = [](const std::pair<std::size_t, std::size_t>& r) {
+            return r.second - r.first;
+        };
+        std::sort(w.runs.begin(), w.runs.end(),
+                  [&](const auto& a, const auto& b) { return run_size(a) > run_size(b); });
         // A second entry much narrower than the first is a jaw reaching near the rim,
         // not another shaft coming in (a 5 mm shaft is half a 10 mm one).
         while (w.runs.size() > kMaxTools ||
-               (w.runs.size() > 1 && run_size(w.runs.back()) < params_.min_entry_ratio * run_size(w.runs.front())))
+               (w.runs.size() > 1 &&
+                run_size(w.runs.back()) < params_.min_entry_ratio * run_size(w.runs.front())))
             w.runs.pop_back();
 
         const std::size_t lines = w.runs.size();
         std::array<Line, kMaxTools> line{};
         double n_all = 0, l1 = 0, l2 = 0;
         Line whole;
-        fit_axis(begin, end, [](const Px*) { return true; }, whole, n_all, l1, l2);
+        fit_axis(
+            begin, end, [](const Px*) { return true; }, whole, n_all, l1, l2);
         w.owner.assign(static_cast<std::size_t>(end - begin), 0);
-        if (lines > 1) {
-            // Two tools in one region (touching or crossing): k-lines, each started at
-            // its entry and aimed at the region's centre, then refitted to the pixels
-            // nearer to it than to the other.
+        std::array<Point2, kMaxTools> entry{};
+        for (std::size_t j = 0; j < lines; ++j) {
+            double m = 0;
+            for (std::size_t k = w.runs[j].first; k < w.runs[j].second; ++k) {
+                const RimPixel& e = w.entries[k % w.entries.size()];
+                entry[j].x += e.x, entry[j].y += e.y, m += 1;
+            }
+            entry[j] = {entry[j].x / m, entry[j].y / m};
+        }
+        // Two tracked tools in one region (touching or crossing): each entry goes to
+        // the track that came in nearest to it, and each pixel to the tool whose
+        // predicted shaft (entry to predicted tip, a segment, so a jaw beyond the other
+        // tool's tip stays with its own tool) is nearer. In px, not in widths: a wide
+        // tool's open jaws would otherwise claim the thin tool's tip.
+        std::array<int, kMaxTools> run_track{-1, -1};
+        if (lines > 1 && two_tracks) {
+            auto d = [&](std::size_t j, std::size_t t) {
+                return std::hypot(entry[j].x - w.tracks[t].rim_end.x,
+                                  entry[j].y - w.tracks[t].rim_end.y);
+            };
+            const bool straight = d(0, 0) + d(1, 1) <= d(0, 1) + d(1, 0);
+            run_track = {straight ? 0 : 1, straight ? 1 : 0};
+            const Point2 tip0 = predicted[run_track[0]], tip1 = predicted[run_track[1]];
+            for (const Px* p = begin; p != end; ++p)
+                w.owner[p - begin] = segment_distance(entry[1], tip1, p->x, p->y) <
+                                     segment_distance(entry[0], tip0, p->x, p->y);
+        } else if (lines > 1) {
+            // Two tools, not both tracked yet: k-lines, each started at its entry and
+            // aimed at the region's centre, then refitted to the pixels nearer to it
+            // than to the other.
             for (std::size_t j = 0; j < lines; ++j) {
-                double ex = 0, ey = 0, m = 0;
-                for (std::size_t k = w.runs[j].first; k < w.runs[j].second; ++k) {
-                    const RimPixel& e = w.entries[k % w.entries.size()];
-                    ex += e.x, ey += e.y, m += 1;
-                }
-                ex /= m, ey /= m;
-                const double dx = whole.px - ex, dy = whole.py - ey, d = std::max(1e-9, std::hypot(dx, dy));
-                line[j] = {ex, ey, dx / d, dy / d};
+                const double dx = whole.px - entry[j].x, dy = whole.py - entry[j].y,
+                             d = std::max(1e-9, std::hypot(dx, dy));
+                line[j] = {entry[j].x, entry[j].y, dx / d, dy / d};
             }
             for (int iter = 0; iter < 6; ++iter) {
                 for (const Px* p = begin; p != end; ++p) {
                     std::uint8_t best = 0;
                     for (std::size_t j = 1; j < lines; ++j)
-                        if (line[j].distance(p->x, p->y) < line[best].distance(p->x, p->y)) best = static_cast<std::uint8_t>(j);
+                        if (line[j].distance(p->x, p->y) < line[best].distance(p->x, p->y))
+                            best = static_cast<std::uint8_t>(j);
                     w.owner[p - begin] = best;
                 }
                 for (std::size_t j = 0; j < lines; ++j) {
                     double nj, a1, a2;
                     Line fitted;
-                    if (fit_axis(begin, end, [&](const Px* p) { return w.owner[p - begin] == j; }, fitted, nj, a1, a2))
+                    if (fit_axis(
+                            begin, end, [&](const Px* p) { return w.owner[p - begin] == j; },
+                            fitted, nj, a1, a2))
                         line[j] = fitted;
                 }
             }
@@ -289,15 +387,42 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
             auto mine = [&](const Px* p) { return w.owner[p - begin] == j; };
             double nj = 0, a1 = 0, a2 = 0;
             Line axis;
-            if (!fit_axis(begin, end, mine, axis, nj, a1, a2) || nj < (lines > 1 ? 0.5 : 1.0) * min_area) continue;
-            if (std::sqrt(a1 / a2) < params_.min_elongation) continue;
-            double lo = std::numeric_limits<double>::max(), hi = -lo, psum = 0;
+            if (!fit_axis(begin, end, mine, axis, nj, a1, a2) ||
+                nj < (lines > 1 ? 0.5 : 1.0) * min_area)
+                continue;
+            if (run_track[j] >= 0) {
+                // A tracked tool sharing its region: its shaft keeps the predicted
+                // direction from its entry (a tool turns a fraction of a degree per
+                // frame; the shared region's shape says little about it).
+                const double a = w.tracks[run_track[j]].angle.position() * M_PI / 180.0;
+                axis = {entry[j].x, entry[j].y, -std::cos(a), -std::sin(a)};
+            } else if (std::sqrt(a1 / a2) < params_.min_elongation) {
+                continue;
+            }
+            // A tracked tool's end is not looked for under the other tool's predicted
+            // shaft (half its width, and the blur's 1.5 px, about the segment from its
+            // entry to its tip): the pixels there show the other tool, whichever lies
+            // on top; nor further than its own width from its own axis (a straight tool
+            // ends on its axis; what lies aside is the other tool's jaw).
+            const int other = run_track[j] >= 0 ? run_track[1 - j] : -1;
+            auto hidden = [&](const Px* p) {
+                if (other < 0) return false;
+                const double lateral =
+                    std::abs((p->x - axis.px) * axis.uy - (p->y - axis.py) * axis.ux);
+                return lateral > w.tracks[run_track[j]].width ||
+                       segment_distance(entry[1 - j], predicted[other], p->x, p->y) <
+                           0.5 * w.tracks[other].width + 1.5;
+            };
+            double lo = std::numeric_limits<double>::max(), hi = -lo, hi_seen = -lo, psum = 0;
             for (const Px* p = begin; p != end; ++p)
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     lo = std::min(lo, t), hi = std::max(hi, t);
+                    if (!hidden(p)) hi_seen = std::max(hi_seen, t);
                     psum += w.prob.at<std::uint8_t>(p->y, p->x);
                 }
+            const bool end_hidden = other >= 0 && hi_seen > lo && hi_seen < hi;
+            if (end_hidden) hi = hi_seen;
             const double band = std::max(1.0, 0.03 * (hi - lo));
             Point2 e_lo, e_hi;
             double n_lo = 0, n_hi = 0, half_lo = 0;
@@ -306,13 +431,17 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     if (t <= lo + band) e_lo.x += p->x, e_lo.y += p->y, n_lo += 1;
-                    if (t >= hi - band) e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
+                    if (t >= hi - band && t <= hi && !(end_hidden && hidden(p)))
+                        e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
                     half_lo += t < mid;
                 }
             e_lo = {e_lo.x / n_lo, e_lo.y / n_lo};
             e_hi = {e_hi.x / n_hi, e_hi.y / n_hi};
             const double d_lo = rim_distance(e_lo.x, e_lo.y), d_hi = rim_distance(e_hi.x, e_hi.y);
             if (std::min(d_lo, d_hi) > touch) continue;  // this part does not reach the rim
+            // Both ends at the rim: it lies along the edge of the picture (a caption
+            // band, the rim's own glare) instead of coming in through it.
+            if (std::max(d_lo, d_hi) <= touch) continue;
             Candidate c;
             c.area = nj;
             c.length = std::max(1.0, hi - lo);
@@ -334,7 +463,8 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     if (t < t0 || t >= t1) continue;
-                    const int k = std::min(kSlices - 1, static_cast<int>((t - t0) / (t1 - t0) * kSlices));
+                    const int k =
+                        std::min(kSlices - 1, static_cast<int>((t - t0) / (t1 - t0) * kSlices));
                     const double o = -(p->x - axis.px) * axis.uy + (p->y - axis.py) * axis.ux;
                     s_min[k] = std::min(s_min[k], o - 0.5), s_max[k] = std::max(s_max[k], o + 0.5);
                 }
@@ -347,76 +477,143 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
                 }
                 if (n < 3) return false;
                 const double den = n * stt - st * st;
-                const double slope = std::abs(den) > 1e-9 ? (n * sto - st * so) / den : 0, icpt = (so - slope * st) / n;
+                const double slope = std::abs(den) > 1e-9 ? (n * sto - st * so) / den : 0,
+                             icpt = (so - slope * st) / n;
                 auto at = [&](double t) {
                     const double o = icpt + slope * t;
-                    return Point2{axis.px + t * axis.ux - o * axis.uy, axis.py + t * axis.uy + o * axis.ux};
+                    return Point2{axis.px + t * axis.ux - o * axis.uy,
+                                  axis.py + t * axis.uy + o * axis.ux};
                 };
                 out = {at(lo), at(hi)};
                 return true;
             };
-            c.has_edges = fit_side(s_min, c.e1) && fit_side(s_max, c.e2);
+            c.has_edges = run_track[j] < 0 && fit_side(s_min, c.e1) && fit_side(s_max, c.e2);
             c.confidence = std::clamp(psum / nj / 255.0, 0.0, 1.0);
+            c.split = lines > 1;
+            c.end_hidden = end_hidden;
+            c.track = run_track[j];
+            c.axis_deg = c.track >= 0 ? std::remainder(w.tracks[c.track].angle.position(), 360.0)
+                                      : std::atan2(c.rim_end.y - c.tip.y, c.rim_end.x - c.tip.x) *
+                                            180.0 / M_PI;
             w.candidates.push_back(c);
         }
     }
-    std::sort(w.candidates.begin(), w.candidates.end(), [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
+    std::sort(w.candidates.begin(), w.candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
     const std::size_t found = std::min({w.candidates.size(), params_.max_tools, kMaxTools});
 
-    // Identities: the assignment of candidates to live tracks with the least summed tip distance.
+    // Identities: candidates to live tracks, the assignment of least summed cost (tip
+    // distance to the prediction in widths, plus the turn of the axis in units of
+    // kAngleGateDeg); a candidate cut out by a track's prediction belongs to it.
     std::array<int, kMaxTools> track_of{-1, -1};
+    auto pair_cost = [&](const Candidate& c, std::size_t t) {
+        const Track& tr = w.tracks[t];
+        if (c.track >= 0 && static_cast<std::size_t>(c.track) != t) return 1e9;
+        const double a = c.axis_deg;
+        return std::hypot(c.tip.x - tr.x.position(), c.tip.y - tr.y.position()) /
+                   std::max(2.0, tr.width) +
+               angle_diff_deg(a, tr.angle.position()) / kAngleGateDeg;
+    };
     double best = std::numeric_limits<double>::max();
-    const std::size_t nt = std::min(params_.max_tools, kMaxTools);
-    for (int perm = 0; perm < 2; ++perm) {
+    for (int perm = 0; perm < (nt < 2 ? 1 : 2); ++perm) {
         std::array<int, kMaxTools> pick{-1, -1};
         double cost = 0;
         for (std::size_t k = 0; k < found; ++k) {
             const std::size_t t = perm == 0 ? k : (nt - 1 - k);
-            if (t >= nt || tracks_[t].id < 0) continue;
+            if (t >= nt || w.tracks[t].id < 0) {
+                cost += 1e6;  // a new track: dearer than any match that is allowed
+                continue;
+            }
             pick[k] = static_cast<int>(t);
-            cost += std::hypot(w.candidates[k].tip.x - tracks_[t].tip.x, w.candidates[k].tip.y - tracks_[t].tip.y);
+            cost += pair_cost(w.candidates[k], t);
         }
         if (cost < best) best = cost, track_of = pick;
-        if (nt < 2) break;
     }
-    std::array<bool, kMaxTools> used{false, false};
+    std::array<bool, kMaxTools> used{false, false}, fresh{false, false};
     for (std::size_t k = 0; k < found; ++k)
         if (track_of[k] >= 0) used[track_of[k]] = true;
     for (std::size_t k = 0; k < found; ++k) {
         if (track_of[k] >= 0) continue;
-        for (std::size_t t = 0; t < nt; ++t)
-            if (!used[t] && tracks_[t].id < 0) {
-                track_of[k] = static_cast<int>(t), used[t] = true;
-                tracks_[t].id = next_id_++;
-                break;
-            }
-        if (track_of[k] < 0)  // both tracks live but unmatched: take the stalest
-            for (std::size_t t = 0; t < nt; ++t)
-                if (!used[t]) {
-                    track_of[k] = static_cast<int>(t), used[t] = true;
-                    tracks_[t].id = next_id_++;
-                    break;
+        // A free track, else (both live but unmatched) the unused one.
+        for (int pass = 0; pass < 2 && track_of[k] < 0; ++pass)
+            for (std::size_t t = 0; t < nt && track_of[k] < 0; ++t)
+                if (!used[t] && (pass == 1 || w.tracks[t].id < 0)) {
+                    track_of[k] = static_cast<int>(t), used[t] = true, fresh[t] = true;
+                    w.tracks[t] = Track{};
+                    w.tracks[t].id = next_id_++;
                 }
     }
     for (std::size_t t = 0; t < nt; ++t)
-        if (!used[t] && tracks_[t].id >= 0 && ++tracks_[t].missed > params_.keep_frames) tracks_[t] = Track{};
+        if (!used[t] && w.tracks[t].id >= 0 && ++w.tracks[t].missed > params_.keep_frames)
+            w.tracks[t] = Track{};
 
     const double inv = 1.0 / w.scale;
     std::size_t count = 0;
     for (std::size_t k = 0; k < found; ++k) {
         const Candidate& c = w.candidates[k];
-        Track& t = tracks_[track_of[k]];
-        t.tip = c.tip;
+        Track& t = w.tracks[track_of[k]];
+        const double measured_deg = c.axis_deg;
+        Point2 tip = c.tip;  // the measurement, or where it says the tip is at least
+        bool coast = false;
+        if (fresh[track_of[k]]) {
+            t.x.reset(tip.x), t.y.reset(tip.y), t.angle.reset(measured_deg);
+        } else {
+            const double pa = t.angle.position(),
+                         za = pa + std::remainder(measured_deg - pa, 360.0);
+            if (c.split && t.coasted < params_.max_coast_frames) {
+                // Where this tool runs under the other one's predicted shaft, the end
+                // seen is where it disappears: the tip is at least that far from the
+                // rim, not nearer (the lateral position still counts).
+                if (c.end_hidden) {
+                    const double ux = std::cos(pa * M_PI / 180.0), uy = std::sin(pa * M_PI / 180.0);
+                    const double along = (tip.x - predicted[track_of[k]].x) * ux +
+                                         (tip.y - predicted[track_of[k]].y) * uy;
+                    if (along > 0) tip.x -= along * ux, tip.y -= along * uy;
+                }
+                // A part of a shared region that jumped away from the prediction belongs
+                // to the other tool (a jaw across its shaft); the track coasts. The gate:
+                // at least a width, at most two (the book's tolerance) however long it coasted.
+                const double s = std::sqrt(
+                    std::max(t.x.innovation_var(kTipNoise), t.y.innovation_var(kTipNoise)));
+                const double gate = std::clamp(kGateSigmas * s, t.width, 2 * t.width);
+                coast = std::hypot(tip.x - t.x.position(), tip.y - t.y.position()) > gate ||
+                        std::abs(za - pa) > kAngleGateDeg;
+            }
+            if (!coast) {
+                t.x.update(tip.x, kTipNoise), t.y.update(tip.y, kTipNoise);
+                if (c.track < 0) t.angle.update(za, kAngleNoise);  // else the prediction itself
+            }
+        }
         t.missed = 0;
-        const double dx = c.rim_end.x - c.tip.x, dy = c.rim_end.y - c.tip.y, len = std::max(1e-9, std::hypot(dx, dy));
+        t.coasted = coast ? t.coasted + 1 : 0;
+        if (!coast) {
+            t.rim_end = c.rim_end;
+            if (!c.split || t.width <= 0) t.width = c.width;
+            t.confidence = c.confidence;
+        }
         ToolEstimate& e = out[count++];
         e = ToolEstimate{};
         e.id = t.id;
         e.present = true;
-        e.tip = {c.tip.x * inv, c.tip.y * inv};
-        e.head = {(c.tip.x + dx / len * params_.head_widths * c.width) * inv,
-                  (c.tip.y + dy / len * params_.head_widths * c.width) * inv};
-        e.axis_deg = std::atan2(dy, dx) * 180.0 / M_PI;
+        if (coast) {
+            // The prediction, at half the last confidence; no edges, so no 3-D pose.
+            const double a = t.angle.position() * M_PI / 180.0, ux = std::cos(a), uy = std::sin(a);
+            tip = t.tip();
+            e.tip = {tip.x * inv, tip.y * inv};
+            e.head = {(tip.x + ux * params_.head_widths * t.width) * inv,
+                      (tip.y + uy * params_.head_widths * t.width) * inv};
+            e.axis_deg = std::remainder(t.angle.position(), 360.0);
+            e.width_px = t.width * inv;
+            e.confidence = 0.5 * t.confidence;
+            e.edges.midline = {e.tip, {t.rim_end.x * inv, t.rim_end.y * inv}};
+            continue;
+        }
+        const double dx = std::cos(c.axis_deg * M_PI / 180.0),
+                     dy = std::sin(c.axis_deg * M_PI / 180.0), len = 1.0;
+        e.tip = {tip.x * inv, tip.y * inv};
+        e.head = {(tip.x + dx / len * params_.head_widths * c.width) * inv,
+                  (tip.y + dy / len * params_.head_widths * c.width) * inv};
+        e.axis_deg = c.axis_deg;
         e.width_px = c.width * inv;
         e.confidence = c.confidence;
         e.edges.found = c.has_edges;
@@ -424,12 +621,19 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame, std::span<Tool
         // The coarse edges (analysis scale) refined on the full-resolution frame, from
         // the tip's end: the 3-D pose's depth rests on the apparent width, where a
         // pixel is worth about 4 % of the distance.
-        auto scaled = [inv](const Segment& s) { return Segment{{s.a.x * inv, s.a.y * inv}, {s.b.x * inv, s.b.y * inv}}; };
-        const bool tip_at_a = std::hypot(c.e1.a.x - c.tip.x, c.e1.a.y - c.tip.y) < std::hypot(c.e1.b.x - c.tip.x, c.e1.b.y - c.tip.y);
+        auto scaled = [inv](const Segment& s) {
+            return Segment{{s.a.x * inv, s.a.y * inv}, {s.b.x * inv, s.b.y * inv}};
+        };
+        const bool tip_at_a = std::hypot(c.e1.a.x - c.tip.x, c.e1.a.y - c.tip.y) <
+                              std::hypot(c.e1.b.x - c.tip.x, c.e1.b.y - c.tip.y);
         auto from_tip = [tip_at_a](Segment s) { return tip_at_a ? s : Segment{s.b, s.a}; };
         if (c.has_edges) {
-            e.edges.e1 = refine_edge(full, from_tip(scaled(c.e1)), 1.0, 2.5 * inv);
-            e.edges.e2 = refine_edge(full, from_tip(scaled(c.e2)), 1.0, 2.5 * inv);
+            // Only the shaft: from a width past the head (the jaws are narrower and
+            // would pull the lines together, making the tool look further away).
+            const double shaft_from =
+                std::clamp((params_.head_widths + 1) * c.width / c.length, 0.2, 0.8);
+            e.edges.e1 = refine_edge(full, from_tip(scaled(c.e1)), shaft_from, 1.0, 2.5 * inv);
+            e.edges.e2 = refine_edge(full, from_tip(scaled(c.e2)), shaft_from, 1.0, 2.5 * inv);
         }
         e.edges.midline = {e.tip, {c.rim_end.x * inv, c.rim_end.y * inv}};
     }

@@ -7,19 +7,27 @@
 // (12), eroded by `surround_margin_px`); a 5x5 Gaussian; threshold at
 // `threshold` (128 = even odds); a 3x3 opening; 8-connected regions. A region is a tool
 // when its area is at least `min_area_fraction` of the frame, its length (principal
-// axis, from the second moments) at least `min_elongation` x its width, and one end
-// lies within `border_touch_fraction` x the frame width of the edge of the lit area or
-// the image border (tools come in through the incision, from outside the picture).
-// Where one region meets the rim in two places (two tools touching or crossing), it is
-// split by two lines fitted alternately to the pixels nearer each (k-lines), when the
-// smaller entry is at least `min_entry_ratio` (0.2) of the larger. The
+// axis, from the second moments) at least `min_elongation` x its width, and one end,
+// not both, lies within `border_touch_fraction` x the frame width of the edge of the
+// lit area or the image border (tools come in through the incision; a band with both
+// ends there lies along the edge). Where one region meets the rim in two places (two
+// tools touching or crossing) and not both are tracked, it is split by two lines
+// fitted alternately to the pixels nearer each (k-lines), when the smaller entry is
+// at least `min_entry_ratio` (0.2) of the larger. The
 // larger regions win, up to `max_tools`.
 // Per tool: the tip is the end away from the rim (mean of the region's pixels within
 // 3 % of the length of that extreme); axis_deg points from the tip to the rim end;
 // width = area / length; the head (joint of shaft and jaws) is `head_widths` widths
-// from the tip along the axis. Identities: regions are matched to last frame's tools
-// by the smallest summed tip distance; a tool missing for `keep_frames` frames loses
-// its id. Results in the full frame's coordinates. Borrows nothing; owns the model.
+// from the tip along the axis. Tracks (fig. 4.22/4.27/4.28): a constant-velocity
+// Kalman filter per tool on the tip and the axis angle predicts each tool; regions go
+// to tracks by the least summed distance of tip (in widths) and axis (in 20 degrees).
+// A region shared by two tracked tools is split by their predicted shafts (entry to
+// predicted tip, nearest segment), keeps the predicted axis, and does not look for a
+// tool's end under the other's shaft or beyond its own width from its axis; such a
+// measurement that jumps more than the gate (4 sigma, one to two widths) or turns by
+// more than 20 degrees is the other tool's part, and the track reports its prediction
+// at half confidence, up to `max_coast_frames`. A tool missing for `keep_frames`
+// frames loses its id. Results in the full frame's coordinates. Owns the model.
 #pragma once
 
 #include <array>
@@ -40,8 +48,9 @@ struct LikelihoodToolTrackerParams {
     double min_elongation = 2.0;
     double border_touch_fraction = 0.06;
     double min_entry_ratio = 0.2;  // a second rim entry counts when >= this x the first
-    double head_widths = 2.7;  // median on simulator training scenes (docs/tracking.md)
+    double head_widths = 2.7;      // median on simulator training scenes (docs/tracking.md)
     int keep_frames = 5;
+    int max_coast_frames = 25;  // a crossing at 3 cm/s takes about a second
     std::size_t max_tools = 2;
 };
 
@@ -55,14 +64,9 @@ public:
 
 private:
     struct Work;
-    struct Track {
-        int id = -1, missed = 0;
-        Point2 tip;
-    };
     ToolLikelihood model_;
     LikelihoodToolTrackerParams params_;
     std::unique_ptr<Work> work_;
-    std::array<Track, kMaxTools> tracks_{};
     int next_id_ = 0;
 };
 
