@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <sstream>
 
+#include "endotower/sci/sci_menu.hpp"
 #include "endotower/v4l2/capture_format.hpp"
 
 namespace endotower::firmware {
@@ -198,7 +199,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         return false;
     }
     if (!r.keys(root, "", {"board", "description", "video", "analysis", "sim", "capture", "button", "handle",
-                           "calibration", "display", "paths"}))
+                           "calibration", "display", "paths", "sci"}))
         return false;
     if (!root["board"]) return r.fail(root, "board", "missing (the board's name)");
     if (!r.text(root, "board", "board", c.name) || !r.text(root, "description", "description", c.description))
@@ -282,10 +283,27 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (!r.keys(p, "paths", {"storage"}) || !r.text(p, "storage", "paths.storage", c.storage))
             return false;
     }
+    if (const YAML::Node n = root["sci"]) {
+        if (!r.keys(n, "sci", {"layout", "dwell_ms", "activation_hold_ms", "cross_hold_ms", "confirm_ms", "media",
+                               "patient_record"}) ||
+            !r.text(n, "layout", "sci.layout", c.sci_layout) ||
+            !r.number(n, "dwell_ms", "sci.dwell_ms", 100, 60000, c.sci_dwell_ms) ||
+            !r.number(n, "activation_hold_ms", "sci.activation_hold_ms", 100, 60000, c.sci_activation_hold_ms) ||
+            !r.number(n, "cross_hold_ms", "sci.cross_hold_ms", 100, 60000, c.sci_cross_hold_ms) ||
+            !r.number(n, "confirm_ms", "sci.confirm_ms", 100, 60000, c.sci_confirm_ms) ||
+            !r.text(n, "media", "sci.media", c.sci_media) ||
+            !r.text(n, "patient_record", "sci.patient_record", c.sci_patient_record))
+            return false;
+        sci::SciLayout layout;
+        if (!sci::parse_sci_layout(c.sci_layout, layout))
+            return r.fail(n["layout"], "sci.layout",
+                          "unknown layout '" + c.sci_layout + "' (expected buttons, ring or three_level)");
+        c.sci = true;
+    }
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
     for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model,
-                           &c.calibration, &c.gesture_model, &c.storage})
+                           &c.calibration, &c.gesture_model, &c.storage, &c.sci_media, &c.sci_patient_record})
         *p = resolve(base, *p);
     out = std::move(c);
     return true;

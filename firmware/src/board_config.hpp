@@ -40,6 +40,13 @@ struct BoardConfig {
     std::string gesture_model;     // a file of 'endotower train-gestures'
     double gesture_hold_ms = 1000.0;  // held still this long before it fires
 
+    // sci: the surgeon-computer interface (issue 8, docs/sci.md); on when the map is present
+    bool sci = false;
+    std::string sci_layout = "three_level";  // "buttons" | "ring" | "three_level"
+    double sci_dwell_ms = 2000, sci_activation_hold_ms = 3000, sci_cross_hold_ms = 1000, sci_confirm_ms = 2000;
+    std::string sci_media;           // folder with ct/, xray/, mri/ image sub-folders
+    std::string sci_patient_record;  // a text file, one line per record line
+
     // display (drivers/display): display.card, .connector, .mode "WxH@HZ", .zero_copy, .atomic
     std::string display_card = "/dev/dri/card0";
     std::string display_connector;  // "" = the first connected

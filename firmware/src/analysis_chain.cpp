@@ -1,0 +1,199 @@
+#include "analysis_chain.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <optional>
+
+#include "endotower/app/stage_chain.hpp"
+#include "endotower/app/status_badge.hpp"
+#include "endotower/calibration/calibration_stage.hpp"
+#include "endotower/calibration/undistorter.hpp"
+#include "endotower/sci/sci_stage.hpp"
+#include "endotower/vision/gesture_stage.hpp"
+#include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/vision/likelihood_tool_tracker.hpp"
+#include "endotower/vision/tool_tracking_stage.hpp"
+
+namespace endotower::firmware {
+
+namespace fs = std::filesystem;
+
+struct AnalysisChain::Parts {
+    app::StatusBadge badge;
+    std::optional<vision::KalmanToolTracker> kalman;
+    vision::ToolLikelihood tool_model;
+    std::optional<vision::LikelihoodToolTracker> likelihood;
+    std::optional<vision::ToolTrackingStage> tracking;
+    calibration::Calibration cal;
+    std::optional<calibration::CalibrationStage> calibration_stage;
+    calibration::Undistorter undistorter;
+    std::optional<vision::RegionTracker> region_tracker;
+    std::optional<vision::RegionStage> regions;
+    vision::GestureClassifier gesture_classifier;
+    vision::ToolLikelihood gesture_tool_model;
+    std::optional<vision::GestureSegmenter> gesture_segmenter;
+    std::optional<vision::GestureStage> gesture_stage;
+    std::optional<sci::SciStage> sci;
+    app::StageChain chain;
+};
+
+namespace {
+
+// The SCI's patient data: image files per modality sub-folder (ct, xray, mri; sorted by
+// name) and the patient record's lines. What is missing is said once and shown in the
+// overlay; the interface goes on.
+sci::SciMedia load_sci_media(const BoardConfig& b, const char* command) {
+    sci::SciMedia m;
+    std::string problems;
+    if (!b.sci_media.empty()) {
+        std::error_code ec;
+        if (!fs::is_directory(b.sci_media, ec)) problems += "media folder not found: " + b.sci_media + "; ";
+        for (std::size_t k = 0; k < sci::kModalityCount && problems.empty(); ++k) {
+            const fs::path dir = fs::path(b.sci_media) / std::string(sci::to_string(static_cast<sci::SciModality>(k)));
+            if (!fs::is_directory(dir, ec)) continue;
+            for (const auto& e : fs::directory_iterator(dir, ec)) {
+                std::string ext = e.path().extension().string();
+                std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+                if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".dcm"))
+                    m.names[k].push_back(e.path().filename().string());
+            }
+            std::sort(m.names[k].begin(), m.names[k].end());
+        }
+    }
+    if (!b.sci_patient_record.empty()) {
+        std::ifstream in(b.sci_patient_record);
+        if (!in) problems += "patient record not readable: " + b.sci_patient_record + "; ";
+        for (std::string line; in && std::getline(in, line);) m.record_lines.push_back(line);
+    }
+    if (!problems.empty()) {
+        problems.resize(problems.size() - 2);
+        std::fprintf(stderr, "endotower %s: sci: %s\n", command, problems.c_str());
+        m.message = problems;
+    }
+    return m;
+}
+
+}  // namespace
+
+AnalysisChain::AnalysisChain() : parts_(std::make_unique<Parts>()) {}
+AnalysisChain::~AnalysisChain() = default;
+
+app::AnalysisStage* AnalysisChain::stage() { return parts_->chain.size() == 0 ? nullptr : &parts_->chain; }
+const vision::RegionStage& AnalysisChain::regions() const { return *parts_->regions; }
+
+bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& input, std::vector<vision::RegionMark> marks,
+                          hal::OverlayRenderer* renderer, app::Log& log, const char* command, std::string& error) {
+    Parts& p = *parts_;
+    // The scope's calibration: validated now, named in every trace line.
+    if (!board.calibration.empty()) {
+        if (!calibration::load_calibration(board.calibration, p.cal, error)) {
+            error += " (calibration in " + board.path + ")";
+            return false;
+        }
+        std::ifstream in(board.calibration, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string hash = calibration::content_hash(bytes);
+        std::printf("calibration: %s (scope %s, model %s, hash %s)\n", board.calibration.c_str(), p.cal.scope.c_str(),
+                    calibration::to_string(p.cal.model), hash.c_str());
+        p.calibration_stage.emplace(p.cal, board.calibration, hash);
+    }
+
+    vision::KalmanToolTrackerParams kalman_params;
+    kalman_params.red_binarised = board.tracker == "kalman_red";
+    p.kalman.emplace(kalman_params);
+    if (board.tracker == "likelihood" && !p.tool_model.load(board.tool_model, error)) {
+        error = "analysis.tool_model: " + error;
+        return false;
+    }
+    p.likelihood.emplace(p.tool_model);
+    vision::ToolTracker& tracker =
+        board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(*p.likelihood) : *p.kalman;
+    p.tracking.emplace(tracker);
+
+    vision::RegionTrackerParams region_params;
+    vision::parse_region_descriptor(board.region_descriptor, region_params.descriptor);  // checked by the board parser
+    region_params.redetect_interval = board.region_redetect_interval;
+    region_params.min_inliers = board.region_min_inliers;
+    region_params.detect_max_width = board.region_detect_max_width;
+    region_params.propagate = board.region_propagate;
+    p.region_tracker.emplace(region_params);
+    p.regions.emplace(*p.region_tracker);
+    const bool any_regions = !marks.empty();
+    for (vision::RegionMark& m : marks) p.regions->schedule(std::move(m));
+
+    // Gestures (issue 6): a wrong or corrupt model disables them, never the video.
+    bool gestures = false;
+    if (board.gestures) {
+        gestures = p.gesture_classifier.load(board.gesture_model, error);
+        if (gestures && p.gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
+            !p.gesture_tool_model.load(board.tool_model, error)) {
+            error = "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
+            gestures = false;
+        }
+        if (!gestures)
+            std::fprintf(stderr, "endotower %s: analysis.gestures.model: %s; gesture recognition disabled\n", command,
+                         error.c_str());
+        error.clear();
+    }
+    vision::GestureSegmenterParams gesture_seg;
+    gesture_seg.method = p.gesture_classifier.segmentation();
+    p.gesture_segmenter.emplace(&p.gesture_tool_model, gesture_seg);
+    vision::GestureStageParams gesture_params;
+    gesture_params.hold.hold_ms = board.gesture_hold_ms;
+    p.gesture_stage.emplace(*p.gesture_segmenter, p.gesture_classifier, gesture_params);
+
+    if (board.stage == "status_badge") p.chain.add(&p.badge);
+    if (board.tracker != "none") p.chain.add(&*p.tracking);
+    if (p.calibration_stage) p.chain.add(&*p.calibration_stage);
+    // With a calibration of this image size, the tracker's tools get their 3-D pose.
+    hal::SceneCamera camera;
+    if (p.calibration_stage) {
+        if (p.cal.width != input.width || p.cal.height != input.height) {
+            std::printf("calibration: %dx%d, the input is %dx%d: no 3-D tool pose\n", p.cal.width, p.cal.height,
+                        input.width, input.height);
+        } else if (!p.undistorter.init(p.cal, error)) {
+            std::printf("calibration: %s: no 3-D tool pose\n", error.c_str());
+            error.clear();
+        } else {
+            camera = {p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy};
+            // The corrected point whose source is p: a fixed point, the distortion is mild.
+            calibration::Undistorter* u = &p.undistorter;
+            auto to_corrected = [u](vision::Point2 pt) {
+                vision::Point2 q = pt;
+                for (int i = 0; i < 12; ++i) {
+                    const calibration::Point2 s = u->source_of(q.x, q.y);
+                    q.x += pt.x - s.x;
+                    q.y += pt.y - s.y;
+                }
+                return q;
+            };
+            if (board.tracker != "none") p.tracking->set_camera({p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy}, to_corrected,
+                                                                board.tool_diameter_mm);
+        }
+    }
+    if (gestures) p.chain.add(&*p.gesture_stage);
+    if (any_regions) p.chain.add(&*p.regions);
+
+    // The surgeon-computer interface, last: it reads the tools and the gesture.
+    if (board.sci) {
+        sci::SciParams sp;
+        sci::parse_sci_layout(board.sci_layout, sp.layout);  // checked by the board parser
+        sp.dwell_ms = board.sci_dwell_ms;
+        sp.activation_hold_ms = board.sci_activation_hold_ms;
+        sp.cross_hold_ms = board.sci_cross_hold_ms;
+        sp.confirm_ms = board.sci_confirm_ms;
+        if (board.tracker == "none")
+            std::fprintf(stderr, "endotower %s: sci: analysis.tracker is none: no cursor, only the handle drives it\n",
+                         command);
+        p.sci.emplace(sp, board.tracker != "none" ? &*p.tracking : nullptr, gestures ? &*p.gesture_stage : nullptr,
+                      renderer, log, load_sci_media(board, command));
+        p.sci->set_camera(camera);
+        p.chain.add(&*p.sci);
+    }
+    return true;
+}
+
+}  // namespace endotower::firmware
