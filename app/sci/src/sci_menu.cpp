@@ -124,9 +124,11 @@ SciMenuTable build_menus(SciLayout layout, int width, int height) {
     }
 
     if (layout == SciLayout::kRing) {
-        // Fig. 3.34b: inside the field of view's edge (radius ~0.49 h); fig. 3.35's
-        // sub-ring just inside it.
-        const float r0 = 0.39f * h, r1 = 0.47f * h, s0 = 0.30f * h, s1 = 0.38f * h;
+        // Fig. 3.34b: a ring inside the field of view's edge (radius ~0.49 h), leaving
+        // the outer 0.09 h free: near the dark rim the trackers lose the tip (the
+        // likelihood tracker beyond ~0.37 h in the scene suites). Fig. 3.35's sub-ring
+        // just inside it.
+        const float r0 = 0.30f * h, r1 = 0.40f * h, s0 = 0.19f * h, s1 = 0.28f * h;
         SciMenu& m = menu(MenuId::kMain);
         add(m, with(sector("CT", SciAction::kView, cx, cy, r0, r1, -135, -45), SciModality::kCt));
         add(m, with(sector("X-RAY", SciAction::kView, cx, cy, r0, r1, -45, 45), SciModality::kXray));

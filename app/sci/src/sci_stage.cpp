@@ -1,5 +1,7 @@
 #include "endotower/sci/sci_stage.hpp"
 
+#include <utility>
+
 #include "endotower/vision/gesture_classifier.hpp"
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
@@ -57,10 +59,12 @@ void SciStage::process(app::AnalysisContext& ctx) {
     SciFrame f;
     f.t_ns = ctx.frame.capture_ns;
     f.events = ctx.events;
+    std::array<double, 2> confidence{};
     if (tracking_ != nullptr) {
         for (std::size_t i = 0; i < tracking_->tool_count() && f.tool_count < 2; ++i) {
             const vision::ToolEstimate& t = tracking_->tool(i);
             if (!t.present && t.confidence <= 0) continue;
+            confidence[static_cast<std::size_t>(f.tool_count)] = t.confidence;
             SciTool& s = f.tools[static_cast<std::size_t>(f.tool_count++)];
             s.x = t.tip.x, s.y = t.tip.y;
             const vision::ToolPose& p = tracking_->pose(i);
@@ -76,6 +80,8 @@ void SciStage::process(app::AnalysisContext& ctx) {
         f.gesture_fired = g.fired;
         f.gesture_x = g.tip.x, f.gesture_y = g.tip.y;
     }
+    // The cursor is the surest tool.
+    if (f.tool_count == 2 && confidence[1] > confidence[0]) std::swap(f.tools[0], f.tools[1]);
     machine_.step(f);
 
     const SciMachine& m = machine_;

@@ -304,8 +304,8 @@ TEST(SciMachine, RingLayoutPreviousNextMainMenu) {
     Driver d(p);
     d.press(0, 320, 240);
     ASSERT_EQ(d.m.menu().count, 4u);
-    EXPECT_EQ(d.m.menu().hit(320, 240 - 0.43f * kH), 0);  // top of the ring: CT
-    EXPECT_EQ(d.m.menu().hit(320 - 0.43f * kH, 240), 3);  // left: EXIT
+    EXPECT_EQ(d.m.menu().hit(320, 240 - 0.35f * kH), 0);  // top of the ring: CT
+    EXPECT_EQ(d.m.menu().hit(320 - 0.35f * kH, 240), 3);  // left: EXIT
     EXPECT_EQ(d.m.menu().hit(320, 240), -1);              // the view stays free
     EXPECT_EQ(d.dwell("CT", 40 * kMs), 2000 * kMs);
     EXPECT_EQ(d.menu(), "viewer");

@@ -2,7 +2,8 @@
 // the video frame, for the three layouts of the book:
 //   kButtons     overlaid function buttons (fig. 3.32): Display CT / X-Ray / MRI, Exit,
 //                in a column at the right edge;
-//   kRing        a narrow ring around the field of view (fig. 3.34b) split into CT,
+//   kRing        a ring around the field of view (fig. 3.34b; radii 0.30-0.40 x the
+//                frame height, the sub-ring 0.19-0.28) split into CT,
 //                X-RAY, MRI, EXIT; an image page adds an inner sub-ring Previous, Next,
 //                Main menu (fig. 3.35);
 //   kThreeLevel  main menu, submenus and function pages (fig. 4.33/4.34): Main =
