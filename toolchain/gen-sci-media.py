@@ -83,13 +83,15 @@ def main():
             png_grey(os.path.join(d, "%s_%02d.png" % (name, k + 1)), 160, 160, make(k))
     record = os.path.join(out, "patient_record.txt")
     with open(record + ".tmp", "w") as f:
-        f.write("Patient: SIM-0001 (synthetic test record)\n"
-                "Born: 1970-01-01   Sex: F   Weight: 68 kg\n"
-                "Procedure: laparoscopic cholecystectomy\n"
-                "Diagnosis: symptomatic cholelithiasis\n"
-                "Allergies: penicillin\n"
-                "ASA: II   Blood group: A+\n"
-                "CT 2026-10-02: gallstones, no duct dilatation\n")
+        # app/media's patient record format (patient_record.hpp).
+        f.write("# synthetic test record\n"
+                "name: SIM Patient\n"
+                "id: SIM-0001\n"
+                "birth_date: 1970-01-01\n"
+                "procedure: laparoscopic cholecystectomy\n"
+                "notes: diagnosis: symptomatic cholelithiasis\n"
+                "notes: allergies: penicillin\n"
+                "notes: CT 2026-10-02: gallstones, no duct dilatation\n")
     os.replace(record + ".tmp", record)
 
 

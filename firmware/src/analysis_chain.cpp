@@ -11,6 +11,7 @@
 #include "endotower/app/status_badge.hpp"
 #include "endotower/calibration/calibration_stage.hpp"
 #include "endotower/calibration/undistorter.hpp"
+#include "endotower/media/media_library.hpp"
 #include "endotower/sci/sci_stage.hpp"
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
@@ -36,42 +37,70 @@ struct AnalysisChain::Parts {
     vision::ToolLikelihood gesture_tool_model;
     std::optional<vision::GestureSegmenter> gesture_segmenter;
     std::optional<vision::GestureStage> gesture_stage;
+    std::vector<media::MediaLibrary> media;  // the SCI's decoded images, lent to it
     std::optional<sci::SciStage> sci;
     app::StageChain chain;
 };
 
 namespace {
 
-// The SCI's patient data: image files per modality sub-folder (ct, xray, mri; sorted by
-// name) and the patient record's lines. What is missing is said once and shown in the
+// The SCI's patient data (app/media): the images of each modality sub-folder (ct, xray,
+// mri; file-name order), decoded now and registered with the renderer by the stage,
+// and the patient record. What is missing or corrupt is said on stderr and in the
 // overlay; the interface goes on.
-sci::SciMedia load_sci_media(const BoardConfig& b, const char* command) {
+sci::SciMedia load_sci_media(const BoardConfig& b, bool renderer, std::vector<media::MediaLibrary>& libraries,
+                             const char* command) {
     sci::SciMedia m;
     std::string problems;
-    if (!b.sci_media.empty()) {
-        std::error_code ec;
-        if (!fs::is_directory(b.sci_media, ec)) problems += "media folder not found: " + b.sci_media + "; ";
-        for (std::size_t k = 0; k < sci::kModalityCount && problems.empty(); ++k) {
-            const fs::path dir = fs::path(b.sci_media) / std::string(sci::to_string(static_cast<sci::SciModality>(k)));
-            if (!fs::is_directory(dir, ec)) continue;
-            for (const auto& e : fs::directory_iterator(dir, ec)) {
-                std::string ext = e.path().extension().string();
-                std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-                if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".dcm"))
-                    m.names[k].push_back(e.path().filename().string());
-            }
-            std::sort(m.names[k].begin(), m.names[k].end());
+    auto problem = [&problems](const std::string& p) { problems += (problems.empty() ? "" : "; ") + p; };
+    libraries.resize(sci::kModalityCount);
+    std::error_code ec;
+    if (!b.sci_media.empty() && !fs::is_directory(b.sci_media, ec)) problem("media folder not found: " + b.sci_media);
+    int slot = 0;
+    for (std::size_t k = 0; k < sci::kModalityCount && !b.sci_media.empty(); ++k) {
+        const fs::path dir = fs::path(b.sci_media) / std::string(sci::to_string(static_cast<sci::SciModality>(k)));
+        if (!fs::is_directory(dir, ec)) continue;
+        std::string error;
+        if (!libraries[k].load(dir.string(), error)) {
+            problem(error);
+            continue;
+        }
+        // Each modality folder is a MediaLibrary of its own; the record is sci.patient_record.
+        for (const std::string& p : libraries[k].problems())
+            if (p.find(media::MediaLibrary::kPatientFile) == std::string::npos) problem(p);
+        for (const media::MediaImage& img : libraries[k].images()) {
+            m.names[k].push_back(img.name);
+            // The renderer holds kMaxImages; the rest show their name only.
+            const bool fits = renderer && slot < hal::OverlayRenderer::kMaxImages;
+            m.slots[k].push_back(fits ? slot++ : -1);
+            if (fits) m.uploads.push_back(img.view());
         }
     }
+    if (!renderer) m.message = "image not drawn: no overlay renderer";
+    else if (slot == hal::OverlayRenderer::kMaxImages) m.message = "image not loaded: the renderer holds 8";
     if (!b.sci_patient_record.empty()) {
-        std::ifstream in(b.sci_patient_record);
-        if (!in) problems += "patient record not readable: " + b.sci_patient_record + "; ";
-        for (std::string line; in && std::getline(in, line);) m.record_lines.push_back(line);
+        media::PatientRecord r;
+        std::string error;
+        if (!media::load_patient_record(b.sci_patient_record, r, error)) {
+            problem(error);
+            m.record_lines.push_back("Patient record unavailable:");
+            m.record_lines.push_back(error.substr(0, 90));
+        } else {
+            m.record_lines.push_back("Name: " + r.name);
+            m.record_lines.push_back("ID: " + r.id);
+            if (!r.birth_date.empty()) m.record_lines.push_back("Born: " + r.birth_date);
+            if (!r.procedure.empty()) m.record_lines.push_back("Procedure: " + r.procedure);
+            std::size_t at = 0;
+            while (at < r.notes.size()) {
+                const std::size_t nl = std::min(r.notes.find('\n', at), r.notes.size());
+                m.record_lines.push_back(r.notes.substr(at, nl - at));
+                at = nl + 1;
+            }
+        }
     }
     if (!problems.empty()) {
-        problems.resize(problems.size() - 2);
         std::fprintf(stderr, "endotower %s: sci: %s\n", command, problems.c_str());
-        m.message = problems;
+        if (m.message.empty() || renderer) m.message = problems.substr(0, 90);
     }
     return m;
 }
@@ -189,7 +218,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
             std::fprintf(stderr, "endotower %s: sci: analysis.tracker is none: no cursor, only the handle drives it\n",
                          command);
         p.sci.emplace(sp, board.tracker != "none" ? &*p.tracking : nullptr, gestures ? &*p.gesture_stage : nullptr,
-                      renderer, log, load_sci_media(board, command));
+                      renderer, log, load_sci_media(board, renderer != nullptr, p.media, command));
         p.sci->set_camera(camera);
         p.chain.add(&*p.sci);
     }

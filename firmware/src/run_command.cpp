@@ -7,10 +7,12 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <thread>
 
 #include "analysis_chain.hpp"
 #include "board_config.hpp"
+#include "endotower/gles/gles_renderer.hpp"
 #include "commands.hpp"
 #include "devices.hpp"
 #include "endotower/app/no_signal_source.hpp"
@@ -158,9 +160,17 @@ int run_run_command(const Args& args) {
     // The analysis path, as the board says (the same builder as `endotower sim`).
     app::StderrLog log;
     AnalysisChain analysis;
+    // The SCI's overlay is drawn with GLES2 (headless EGL on the host); without one the
+    // SCI still runs and traces.
+    std::unique_ptr<hal::OverlayRenderer> renderer;
+    if (board.sci) {
+        renderer = gles::create_gles_renderer(error);
+        if (!renderer) std::fprintf(stderr, "endotower run: sci: no overlay renderer: %s\n", error.c_str());
+        error.clear();
+    }
     hal::FrameFormat input{};
     input.width = board.capture.width, input.height = board.capture.height;
-    if (!analysis.build(board, input, {}, nullptr, log, "run", error)) {
+    if (!analysis.build(board, input, {}, renderer.get(), log, "run", error)) {
         std::fprintf(stderr, "endotower run: %s\n", error.c_str());
         return kExitBadInput;
     }

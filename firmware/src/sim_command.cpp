@@ -11,6 +11,7 @@
 
 #include "analysis_chain.hpp"
 #include "board_config.hpp"
+#include "endotower/gles/gles_renderer.hpp"
 #include "endotower/app/pipeline.hpp"
 #include "endotower/app/stage_chain.hpp"
 #include "endotower/app/status_badge.hpp"
@@ -227,7 +228,15 @@ int run_sim_command(const Args& args) {
     // The analysis path, as the board says (the same builder as `endotower run`).
     app::StderrLog log;
     AnalysisChain analysis;
-    if (!analysis.build(board, source.format(), std::move(marks), nullptr, log, "sim", error)) {
+    // The SCI's overlay is drawn with GLES2 (headless EGL on the host); without one the
+    // SCI still runs and traces.
+    std::unique_ptr<hal::OverlayRenderer> renderer;
+    if (board.sci) {
+        renderer = gles::create_gles_renderer(error);
+        if (!renderer) std::fprintf(stderr, "endotower sim: sci: no overlay renderer: %s\n", error.c_str());
+        error.clear();
+    }
+    if (!analysis.build(board, source.format(), std::move(marks), renderer.get(), log, "sim", error)) {
         std::fprintf(stderr, "endotower sim: %s\n", error.c_str());
         return kExitBadInput;
     }

@@ -42,17 +42,29 @@ void SciStage::configure(const hal::FrameFormat& format) {
     width_ = format.width, height_ = format.height;
     machine_.configure(width_, height_);
     machine_.set_camera(scene_.camera);
-    if (renderer_ != nullptr && !renderer_->configure(width_, height_)) {
-        log_.printf(app::LogLevel::kWarning, "sci: the overlay renderer %.*s cannot draw %dx%d: %s; the SCI runs without its overlay",
-                    static_cast<int>(renderer_->name().size()), renderer_->name().data(), width_, height_,
-                    renderer_->error().c_str());
-        renderer_ = nullptr;
-        said_no_renderer_ = true;
-    }
+    // The renderer is configured on the analysis thread, where it renders (its GL
+    // context is current on one thread): on the first frame of this format.
+    renderer_configured_ = false;
     if (renderer_ == nullptr && !said_no_renderer_) {
         log_.printf(app::LogLevel::kInfo, "sci: no overlay renderer; the SCI runs and traces, its overlay is not drawn");
         said_no_renderer_ = true;
     }
+}
+
+void SciStage::configure_renderer() {
+    renderer_configured_ = true;
+    if (!renderer_->configure(width_, height_)) {
+        log_.printf(app::LogLevel::kWarning,
+                    "sci: the overlay renderer %.*s cannot draw %dx%d: %s; the SCI runs without its overlay",
+                    static_cast<int>(renderer_->name().size()), renderer_->name().data(), width_, height_,
+                    renderer_->error().c_str());
+        renderer_ = nullptr;
+        return;
+    }
+    for (std::size_t i = 0; i < media_.uploads.size(); ++i)
+        if (!renderer_->set_image(static_cast<int>(i), media_.uploads[i]))
+            log_.printf(app::LogLevel::kWarning, "sci: image %zu not registered with the renderer: %s", i,
+                        renderer_->error().c_str());
 }
 
 void SciStage::process(app::AnalysisContext& ctx) {
@@ -112,6 +124,7 @@ void SciStage::process(app::AnalysisContext& ctx) {
     in.suture_in_mm = f.tool_count >= 2 && f.tools[0].has_3d && f.tools[1].has_3d && scene_.camera.valid();
     build_sci_scene(m, params_, in, scene_);
 
+    if (renderer_ != nullptr && !renderer_configured_) configure_renderer();
     if (renderer_ == nullptr || scene_.empty()) return;
     drawn_.count = 0;
     if (!renderer_->render(scene_, ctx.overlay.layer(), drawn_)) {

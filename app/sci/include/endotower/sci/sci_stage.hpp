@@ -8,6 +8,8 @@
 // Borrows `tracking`, `gestures` (either may be null: no cursor / no gestures) and
 // `renderer` (null: the SCI still runs and traces; the log says once that the overlay
 // is not drawn), all for the stage's lifetime; `log` likewise. `media` is moved in.
+// The renderer is configured (and the media images registered) on the first frame
+// after configure(), on the analysis thread that renders: one GL context, one thread.
 // Trace member, every frame:
 //   "sci": {"state": string, "menu": string|null, "highlighted": string|null,
 //           "event": string|null}   (menu null while inactive; docs/sci.md)
@@ -32,10 +34,13 @@ class GestureStage;
 namespace endotower::sci {
 
 // The patient data the functions show: image names per modality (ct, xray, mri) and
-// the renderer slot each was registered under (-1: not loaded, `message` says why).
+// the renderer slot of each (-1: not loaded, `message` says why); `uploads[i]` is
+// registered as slot i when the stage is configured (borrowed pixels: they must
+// outlive the stage).
 struct SciMedia {
     std::array<std::vector<std::string>, kModalityCount> names;
     std::array<std::vector<int>, kModalityCount> slots;
+    std::vector<hal::ImageView> uploads;
     std::vector<std::string> record_lines;
     std::string message;
 };
@@ -53,6 +58,7 @@ public:
     const hal::OverlayScene& scene() const { return scene_; }
 
 private:
+    void configure_renderer();
     SciParams params_;
     const vision::ToolTrackingStage* tracking_;
     const vision::GestureStage* gestures_;
@@ -64,7 +70,7 @@ private:
     hal::OverlayScene scene_;
     hal::DrawnRects drawn_;
     int width_ = 0, height_ = 0;
-    bool said_no_renderer_ = false, said_render_error_ = false;
+    bool said_no_renderer_ = false, said_render_error_ = false, renderer_configured_ = false;
 };
 
 }  // namespace endotower::sci
