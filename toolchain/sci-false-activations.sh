@@ -7,12 +7,12 @@
 # Inputs: the real cholecystectomy clip ../shared/data/sznitman_lap (skipped when
 # absent), the bundled clip, and the table 4.1 scene suites rendered at FRAMES frames
 # each (default 125 = 5 s at 25 fps; longer than the 3 s hold).
-# Usage: toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
+# Usage: [ENDOTOWER=BINARY] toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_false}
 frames=${2:-125}
-bin=$root/build/release/firmware/endotower
+bin=${ENDOTOWER:-$root/build/release/firmware/endotower}
 mkdir -p "$out"
 inputs=()
 data=$root/../shared/data/sznitman_lap/frames

@@ -48,17 +48,21 @@ namespace {
 // mri; file-name order), decoded now and registered with the renderer by the stage,
 // and the patient record. What is missing or corrupt is said on stderr and in the
 // overlay; the interface goes on.
-sci::SciMedia load_sci_media(const BoardConfig& b, bool renderer, std::vector<media::MediaLibrary>& libraries,
-                             const char* command) {
+sci::SciMedia load_sci_media(const BoardConfig& b, bool renderer,
+                             std::vector<media::MediaLibrary>& libraries, const char* command) {
     sci::SciMedia m;
     std::string problems;
-    auto problem = [&problems](const std::string& p) { problems += (problems.empty() ? "" : "; ") + p; };
+    auto problem = [&problems](const std::string& p) {
+        problems += (problems.empty() ? "" : "; ") + p;
+    };
     libraries.resize(sci::kModalityCount);
     std::error_code ec;
-    if (!b.sci_media.empty() && !fs::is_directory(b.sci_media, ec)) problem("media folder not found: " + b.sci_media);
+    if (!b.sci_media.empty() && !fs::is_directory(b.sci_media, ec))
+        problem("media folder not found: " + b.sci_media);
     int slot = 0;
     for (std::size_t k = 0; k < sci::kModalityCount && !b.sci_media.empty(); ++k) {
-        const fs::path dir = fs::path(b.sci_media) / std::string(sci::to_string(static_cast<sci::SciModality>(k)));
+        const fs::path dir =
+            fs::path(b.sci_media) / std::string(sci::to_string(static_cast<sci::SciModality>(k)));
         if (!fs::is_directory(dir, ec)) continue;
         std::string error;
         if (!libraries[k].load(dir.string(), error)) {
@@ -76,8 +80,10 @@ sci::SciMedia load_sci_media(const BoardConfig& b, bool renderer, std::vector<me
             if (fits) m.uploads.push_back(img.view());
         }
     }
-    if (!renderer) m.message = "image not drawn: no overlay renderer";
-    else if (slot == hal::OverlayRenderer::kMaxImages) m.message = "image not loaded: the renderer holds 8";
+    if (!renderer)
+        m.message = "image not drawn: no overlay renderer";
+    else if (slot == hal::OverlayRenderer::kMaxImages)
+        m.message = "image not loaded: the renderer holds 8";
     if (!b.sci_patient_record.empty()) {
         media::PatientRecord r;
         std::string error;
@@ -110,11 +116,16 @@ sci::SciMedia load_sci_media(const BoardConfig& b, bool renderer, std::vector<me
 AnalysisChain::AnalysisChain() : parts_(std::make_unique<Parts>()) {}
 AnalysisChain::~AnalysisChain() = default;
 
-app::AnalysisStage* AnalysisChain::stage() { return parts_->chain.size() == 0 ? nullptr : &parts_->chain; }
-const vision::RegionStage& AnalysisChain::regions() const { return *parts_->regions; }
+app::AnalysisStage* AnalysisChain::stage() {
+    return parts_->chain.size() == 0 ? nullptr : &parts_->chain;
+}
+const vision::RegionStage& AnalysisChain::regions() const {
+    return *parts_->regions;
+}
 
-bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& input, std::vector<vision::RegionMark> marks,
-                          hal::OverlayRenderer* renderer, app::Log& log, const char* command, std::string& error) {
+bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& input,
+                          std::vector<vision::RegionMark> marks, hal::OverlayRenderer* renderer,
+                          app::Log& log, const char* command, std::string& error) {
     Parts& p = *parts_;
     // The scope's calibration: validated now, named in every trace line.
     if (!board.calibration.empty()) {
@@ -123,10 +134,11 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
             return false;
         }
         std::ifstream in(board.calibration, std::ios::binary);
-        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string bytes((std::istreambuf_iterator<char>(in)),
+                                std::istreambuf_iterator<char>());
         const std::string hash = calibration::content_hash(bytes);
-        std::printf("calibration: %s (scope %s, model %s, hash %s)\n", board.calibration.c_str(), p.cal.scope.c_str(),
-                    calibration::to_string(p.cal.model), hash.c_str());
+        std::printf("calibration: %s (scope %s, model %s, hash %s)\n", board.calibration.c_str(),
+                    p.cal.scope.c_str(), calibration::to_string(p.cal.model), hash.c_str());
         p.calibration_stage.emplace(p.cal, board.calibration, hash);
     }
 
@@ -138,12 +150,14 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
         return false;
     }
     p.likelihood.emplace(p.tool_model);
-    vision::ToolTracker& tracker =
-        board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(*p.likelihood) : *p.kalman;
+    vision::ToolTracker& tracker = board.tracker == "likelihood"
+                                       ? static_cast<vision::ToolTracker&>(*p.likelihood)
+                                       : *p.kalman;
     p.tracking.emplace(tracker);
 
     vision::RegionTrackerParams region_params;
-    vision::parse_region_descriptor(board.region_descriptor, region_params.descriptor);  // checked by the board parser
+    vision::parse_region_descriptor(board.region_descriptor,
+                                    region_params.descriptor);  // checked by the board parser
     region_params.redetect_interval = board.region_redetect_interval;
     region_params.min_inliers = board.region_min_inliers;
     region_params.detect_max_width = board.region_detect_max_width;
@@ -157,14 +171,17 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
     bool gestures = false;
     if (board.gestures) {
         gestures = p.gesture_classifier.load(board.gesture_model, error);
-        if (gestures && p.gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
+        if (gestures &&
+            p.gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
             !p.gesture_tool_model.load(board.tool_model, error)) {
-            error = "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
+            error =
+                "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
             gestures = false;
         }
         if (!gestures)
-            std::fprintf(stderr, "endotower %s: analysis.gestures.model: %s; gesture recognition disabled\n", command,
-                         error.c_str());
+            std::fprintf(
+                stderr, "endotower %s: analysis.gestures.model: %s; gesture recognition disabled\n",
+                command, error.c_str());
         error.clear();
     }
     vision::GestureSegmenterParams gesture_seg;
@@ -181,8 +198,8 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
     hal::SceneCamera camera;
     if (p.calibration_stage) {
         if (p.cal.width != input.width || p.cal.height != input.height) {
-            std::printf("calibration: %dx%d, the input is %dx%d: no 3-D tool pose\n", p.cal.width, p.cal.height,
-                        input.width, input.height);
+            std::printf("calibration: %dx%d, the input is %dx%d: no 3-D tool pose\n", p.cal.width,
+                        p.cal.height, input.width, input.height);
         } else if (!p.undistorter.init(p.cal, error)) {
             std::printf("calibration: %s: no 3-D tool pose\n", error.c_str());
             error.clear();
@@ -199,8 +216,9 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
                 }
                 return q;
             };
-            if (board.tracker != "none") p.tracking->set_camera({p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy}, to_corrected,
-                                                                board.tool_diameter_mm);
+            if (board.tracker != "none")
+                p.tracking->set_camera({p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy}, to_corrected,
+                                       board.tool_diameter_mm);
         }
     }
     if (gestures) p.chain.add(&*p.gesture_stage);
@@ -215,10 +233,13 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
         sp.cross_hold_ms = board.sci_cross_hold_ms;
         sp.confirm_ms = board.sci_confirm_ms;
         if (board.tracker == "none")
-            std::fprintf(stderr, "endotower %s: sci: analysis.tracker is none: no cursor, only the handle drives it\n",
+            std::fprintf(stderr,
+                         "endotower %s: sci: analysis.tracker is none: no cursor, only the handle "
+                         "drives it\n",
                          command);
-        p.sci.emplace(sp, board.tracker != "none" ? &*p.tracking : nullptr, gestures ? &*p.gesture_stage : nullptr,
-                      renderer, log, load_sci_media(board, renderer != nullptr, p.media, command));
+        p.sci.emplace(sp, board.tracker != "none" ? &*p.tracking : nullptr,
+                      gestures ? &*p.gesture_stage : nullptr, renderer, log,
+                      load_sci_media(board, renderer != nullptr, p.media, command));
         p.sci->set_camera(camera);
         p.chain.add(&*p.sci);
     }

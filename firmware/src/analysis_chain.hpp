@@ -30,8 +30,9 @@ class AnalysisChain {
 public:
     AnalysisChain();
     ~AnalysisChain();
-    bool build(const BoardConfig& board, const hal::FrameFormat& input, std::vector<vision::RegionMark> marks,
-               hal::OverlayRenderer* renderer, app::Log& log, const char* command, std::string& error);
+    bool build(const BoardConfig& board, const hal::FrameFormat& input,
+               std::vector<vision::RegionMark> marks, hal::OverlayRenderer* renderer, app::Log& log,
+               const char* command, std::string& error);
     app::AnalysisStage* stage();
     // The region stage (its errors() after the run); valid after build().
     const vision::RegionStage& regions() const;

@@ -9,28 +9,48 @@ namespace {
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-Vec3d add(Vec3d a, Vec3d b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3d sub(Vec3d a, Vec3d b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3d mul(Vec3d a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dot(Vec3d a, Vec3d b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-double norm(Vec3d a) { return std::sqrt(dot(a, a)); }
+Vec3d add(Vec3d a, Vec3d b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+Vec3d sub(Vec3d a, Vec3d b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+Vec3d mul(Vec3d a, double s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+double dot(Vec3d a, Vec3d b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+double norm(Vec3d a) {
+    return std::sqrt(dot(a, a));
+}
 
 // Rz(g) Ry(b) Rx(a), row-major 3x3.
 std::array<double, 9> rotation(const Vec3d& deg) {
     const double ca = std::cos(deg.x * kDeg), sa = std::sin(deg.x * kDeg);
     const double cb = std::cos(deg.y * kDeg), sb = std::sin(deg.y * kDeg);
     const double cg = std::cos(deg.z * kDeg), sg = std::sin(deg.z * kDeg);
-    return {cg * cb, cg * sb * sa - sg * ca, cg * sb * ca + sg * sa,
-            sg * cb, sg * sb * sa + cg * ca, sg * sb * ca - cg * sa,
-            -sb,     cb * sa,                cb * ca};
+    return {cg * cb,
+            cg * sb * sa - sg * ca,
+            cg * sb * ca + sg * sa,
+            sg * cb,
+            sg * sb * sa + cg * ca,
+            sg * sb * ca - cg * sa,
+            -sb,
+            cb * sa,
+            cb * ca};
 }
 
-double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
+double cross2(double ax, double ay, double bx, double by) {
+    return ax * by - ay * bx;
+}
 
 }  // namespace
 
 Vec3d orientation_angles_deg(const Vec3d& d) {
-    auto angle = [](double a, double b, double c) { return std::atan2(a, std::hypot(b, c)) / kDeg; };
+    auto angle = [](double a, double b, double c) {
+        return std::atan2(a, std::hypot(b, c)) / kDeg;
+    };
     return {angle(d.x, d.y, d.z), angle(d.y, d.x, d.z), angle(d.z, d.x, d.y)};
 }
 

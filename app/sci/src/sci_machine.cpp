@@ -6,7 +6,9 @@ namespace endotower::sci {
 
 namespace {
 
-hal::Nanos ms_to_ns(double ms) { return static_cast<hal::Nanos>(std::llround(ms * 1e6)); }
+hal::Nanos ms_to_ns(double ms) {
+    return static_cast<hal::Nanos>(std::llround(ms * 1e6));
+}
 
 double wrap_deg(double a) {
     while (a > 180) a -= 360;
@@ -18,12 +20,18 @@ double wrap_deg(double a) {
 
 std::string_view to_string(SciState s) {
     switch (s) {
-        case SciState::kInactive: return "inactive";
-        case SciState::kActivating: return "activating";
-        case SciState::kMenu: return "menu";
-        case SciState::kHighlight: return "highlight";
-        case SciState::kConfirm: return "confirm";
-        case SciState::kGrabbed: return "grabbed";
+        case SciState::kInactive:
+            return "inactive";
+        case SciState::kActivating:
+            return "activating";
+        case SciState::kMenu:
+            return "menu";
+        case SciState::kHighlight:
+            return "highlight";
+        case SciState::kConfirm:
+            return "confirm";
+        case SciState::kGrabbed:
+            return "grabbed";
     }
     return "?";
 }
@@ -66,10 +74,18 @@ void SciMachine::execute(const SciItem& item) {
     };
     const int n = params_.image_counts[static_cast<std::size_t>(modality_)];
     switch (item.action) {
-        case SciAction::kSubmenu: push(item.target); break;
-        case SciAction::kReturn: open(depth_ > 0 ? parents_[--depth_] : MenuId::kMain); break;
-        case SciAction::kMain: depth_ = 0, open(MenuId::kMain); break;
-        case SciAction::kExit: deactivate("exit"); break;
+        case SciAction::kSubmenu:
+            push(item.target);
+            break;
+        case SciAction::kReturn:
+            open(depth_ > 0 ? parents_[--depth_] : MenuId::kMain);
+            break;
+        case SciAction::kMain:
+            depth_ = 0, open(MenuId::kMain);
+            break;
+        case SciAction::kExit:
+            deactivate("exit");
+            break;
         case SciAction::kView:
             modality_ = item.modality;
             image_ = 0;
@@ -83,7 +99,9 @@ void SciMachine::execute(const SciItem& item) {
             if (n > 0) image_ = (image_ + 1) % n;
             rearm_ = true;
             break;
-        case SciAction::kPatientRecord: push(MenuId::kRecord); break;
+        case SciAction::kPatientRecord:
+            push(MenuId::kRecord);
+            break;
         case SciAction::kImageBox:
             box_.reset();
             box_face_ = box_face_dwelt_ = -1;
@@ -121,7 +139,8 @@ void SciMachine::point(const SciFrame& f) {
     }
     if (!rearm_ && hover_ >= 0 && highlighted_ == hover_) {
         const hal::Nanos dwell = ms_to_ns(params_.dwell_ms), held = f.t_ns - dwell_start_;
-        dwell_fraction_ = dwell > 0 ? std::min(1.0, static_cast<double>(held) / static_cast<double>(dwell)) : 1.0;
+        dwell_fraction_ =
+            dwell > 0 ? std::min(1.0, static_cast<double>(held) / static_cast<double>(dwell)) : 1.0;
         if (held >= dwell) {
             dwell_fraction_ = 0;
             click(hover_);
@@ -162,17 +181,21 @@ void SciMachine::functions(const SciFrame& f) {
         const bool mm = f.tools[0].has_3d && f.tools[1].has_3d && camera_.valid();
         const Vec3d a = mm ? f.tools[0].tip_mm : Vec3d{f.tools[0].x, f.tools[0].y, 0};
         const Vec3d b = mm ? f.tools[1].tip_mm : Vec3d{f.tools[1].x, f.tools[1].y, 0};
-        if (!suture_started_) suture_.reset(a, b);
-        else suture_.step(a, b, dt);
+        if (!suture_started_)
+            suture_.reset(a, b);
+        else
+            suture_.step(a, b, dt);
         suture_started_ = true;
     }
     if (menu_ != MenuId::kBox) return;
     if (state_ == SciState::kGrabbed) {
-        if (f.tool_count > 0 && f.tools[0].has_3d) box_.follow(f.tools[0].tip_mm, f.tools[0].axis_dir);
+        if (f.tool_count > 0 && f.tools[0].has_3d)
+            box_.follow(f.tools[0].tip_mm, f.tools[0].axis_dir);
         return;
     }
     // A face is grabbed by a dwell on it, like a button (fig. 4.36a); it needs the 3-D tip.
-    box_face_ = hover_ < 0 && f.tool_count > 0 ? box_.face_under(f.tools[0].x, f.tools[0].y, camera_) : -1;
+    box_face_ =
+        hover_ < 0 && f.tool_count > 0 ? box_.face_under(f.tools[0].x, f.tools[0].y, camera_) : -1;
     if (box_face_ != box_face_dwelt_) {
         box_face_dwelt_ = box_face_;
         box_dwell_start_ = f.t_ns;
@@ -201,7 +224,8 @@ void SciMachine::step(const SciFrame& f) {
                 open(MenuId::kMain);
                 event_ = "activate_button";
             } else if (state_ == SciState::kGrabbed) {
-                event_ = box_.place(params_.box_target_mm, params_.box_tolerance_mm) ? "place" : "release";
+                event_ = box_.place(params_.box_target_mm, params_.box_tolerance_mm) ? "place"
+                                                                                     : "release";
                 go(SciState::kMenu);
             } else if (state_ != SciState::kConfirm && highlighted_ >= 0) {
                 click(highlighted_);
@@ -210,14 +234,16 @@ void SciMachine::step(const SciFrame& f) {
             deactivate("deactivate");
         } else if (e.kind == hal::ControlEvent::Kind::kWheel && e.delta != 0 &&
                    (state_ == SciState::kMenu || state_ == SciState::kHighlight)) {
-            const int n = menu_ == MenuId::kViewer ? params_.image_counts[static_cast<std::size_t>(modality_)]
-                                                   : static_cast<int>(menu().count);
+            const int n = menu_ == MenuId::kViewer
+                              ? params_.image_counts[static_cast<std::size_t>(modality_)]
+                              : static_cast<int>(menu().count);
             if (n == 0) continue;
             if (menu_ == MenuId::kViewer) {
                 image_ = ((image_ + e.delta) % n + n) % n;
                 event_ = "image";
             } else {
-                highlighted_ = highlighted_ < 0 ? (e.delta > 0 ? e.delta - 1 : n + e.delta) : highlighted_ + e.delta;
+                highlighted_ = highlighted_ < 0 ? (e.delta > 0 ? e.delta - 1 : n + e.delta)
+                                                : highlighted_ + e.delta;
                 highlighted_ = (highlighted_ % n + n) % n;
                 wheel_highlight_ = true;
                 event_ = "wheel";
@@ -227,7 +253,8 @@ void SciMachine::step(const SciFrame& f) {
     }
 
     // A cross held still (fig. 3.34a): the quadrant menu when inactive, else off.
-    if (f.gesture == SciGesture::kCross && cross_armed_ && f.gesture_held_ms >= params_.cross_hold_ms) {
+    if (f.gesture == SciGesture::kCross && cross_armed_ &&
+        f.gesture_held_ms >= params_.cross_hold_ms) {
         cross_armed_ = false;
         if (active()) {
             deactivate("deactivate");
@@ -254,8 +281,10 @@ void SciMachine::step(const SciFrame& f) {
                 if (state_ == SciState::kInactive) event_ = "activation_start";
                 go(SciState::kActivating);
             }
-            const hal::Nanos held = f.t_ns - activation_start_, need = ms_to_ns(params_.activation_hold_ms);
-            activation_fraction_ = std::min(1.0, static_cast<double>(held) / static_cast<double>(need));
+            const hal::Nanos held = f.t_ns - activation_start_,
+                             need = ms_to_ns(params_.activation_hold_ms);
+            activation_fraction_ =
+                std::min(1.0, static_cast<double>(held) / static_cast<double>(need));
             if (held >= need) {
                 depth_ = 0;
                 open(MenuId::kMain);
@@ -264,7 +293,9 @@ void SciMachine::step(const SciFrame& f) {
             break;
         }
         case SciState::kMenu:
-        case SciState::kHighlight: point(f); break;
+        case SciState::kHighlight:
+            point(f);
+            break;
         case SciState::kConfirm:
             track_loop(f);
             if (std::abs(loop_turn_) >= params_.loop_deg) {
@@ -280,7 +311,8 @@ void SciMachine::step(const SciFrame& f) {
                 go(SciState::kMenu);
             }
             break;
-        case SciState::kGrabbed: break;
+        case SciState::kGrabbed:
+            break;
     }
     if (active()) functions(f);
     last_held_ms_ = f.gesture_held_ms;

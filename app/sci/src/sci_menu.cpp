@@ -50,41 +50,59 @@ struct Column {
 }  // namespace
 
 bool parse_sci_layout(std::string_view t, SciLayout& out) {
-    if (t == "buttons") out = SciLayout::kButtons;
-    else if (t == "ring") out = SciLayout::kRing;
-    else if (t == "three_level") out = SciLayout::kThreeLevel;
-    else return false;
+    if (t == "buttons")
+        out = SciLayout::kButtons;
+    else if (t == "ring")
+        out = SciLayout::kRing;
+    else if (t == "three_level")
+        out = SciLayout::kThreeLevel;
+    else
+        return false;
     return true;
 }
 
 std::string_view to_string(SciLayout l) {
     switch (l) {
-        case SciLayout::kButtons: return "buttons";
-        case SciLayout::kRing: return "ring";
-        case SciLayout::kThreeLevel: return "three_level";
+        case SciLayout::kButtons:
+            return "buttons";
+        case SciLayout::kRing:
+            return "ring";
+        case SciLayout::kThreeLevel:
+            return "three_level";
     }
     return "?";
 }
 
 std::string_view to_string(SciModality m) {
     switch (m) {
-        case SciModality::kCt: return "ct";
-        case SciModality::kXray: return "xray";
-        case SciModality::kMri: return "mri";
+        case SciModality::kCt:
+            return "ct";
+        case SciModality::kXray:
+            return "xray";
+        case SciModality::kMri:
+            return "mri";
     }
     return "?";
 }
 
 std::string_view to_string(MenuId m) {
     switch (m) {
-        case MenuId::kMain: return "main";
-        case MenuId::kQuadrant: return "quadrant";
-        case MenuId::kImages: return "preoperative_images";
-        case MenuId::kEffects: return "3d_effects";
-        case MenuId::kViewer: return "viewer";
-        case MenuId::kRecord: return "patient_record";
-        case MenuId::kBox: return "image_box";
-        case MenuId::kSuture: return "suture";
+        case MenuId::kMain:
+            return "main";
+        case MenuId::kQuadrant:
+            return "quadrant";
+        case MenuId::kImages:
+            return "preoperative_images";
+        case MenuId::kEffects:
+            return "3d_effects";
+        case MenuId::kViewer:
+            return "viewer";
+        case MenuId::kRecord:
+            return "patient_record";
+        case MenuId::kBox:
+            return "image_box";
+        case MenuId::kSuture:
+            return "suture";
     }
     return "?";
 }
@@ -93,7 +111,8 @@ int SciMenu::hit(float x, float y) const {
     for (std::size_t k = 0; k < count; ++k) {
         const SciItem& i = items[k];
         if (!i.sector) {
-            if (x >= i.x && x < i.x + i.width && y >= i.y && y < i.y + i.height) return static_cast<int>(k);
+            if (x >= i.x && x < i.x + i.width && y >= i.y && y < i.y + i.height)
+                return static_cast<int>(k);
             continue;
         }
         const float dx = x - i.cx, dy = y - i.cy, r = std::hypot(dx, dy);
@@ -117,9 +136,12 @@ SciMenuTable build_menus(SciLayout layout, int width, int height) {
     {
         const float r0 = 0.22f * h, r1 = std::hypot(w, h);
         SciMenu& q = menu(MenuId::kQuadrant);
-        add(q, with(sector("Open CT", SciAction::kView, cx, cy, r0, r1, -135, -45), SciModality::kCt));
-        add(q, with(sector("Open X-Ray", SciAction::kView, cx, cy, r0, r1, -45, 45), SciModality::kXray));
-        add(q, with(sector("Open MRI", SciAction::kView, cx, cy, r0, r1, 45, 135), SciModality::kMri));
+        add(q,
+            with(sector("Open CT", SciAction::kView, cx, cy, r0, r1, -135, -45), SciModality::kCt));
+        add(q, with(sector("Open X-Ray", SciAction::kView, cx, cy, r0, r1, -45, 45),
+                    SciModality::kXray));
+        add(q,
+            with(sector("Open MRI", SciAction::kView, cx, cy, r0, r1, 45, 135), SciModality::kMri));
         add(q, sector("Exit", SciAction::kExit, cx, cy, r0, r1, 135, 225));
     }
 
@@ -131,7 +153,8 @@ SciMenuTable build_menus(SciLayout layout, int width, int height) {
         const float r0 = 0.30f * h, r1 = 0.40f * h, s0 = 0.19f * h, s1 = 0.28f * h;
         SciMenu& m = menu(MenuId::kMain);
         add(m, with(sector("CT", SciAction::kView, cx, cy, r0, r1, -135, -45), SciModality::kCt));
-        add(m, with(sector("X-RAY", SciAction::kView, cx, cy, r0, r1, -45, 45), SciModality::kXray));
+        add(m,
+            with(sector("X-RAY", SciAction::kView, cx, cy, r0, r1, -45, 45), SciModality::kXray));
         add(m, with(sector("MRI", SciAction::kView, cx, cy, r0, r1, 45, 135), SciModality::kMri));
         add(m, sector("EXIT", SciAction::kExit, cx, cy, r0, r1, 135, 225));
         SciMenu& v = menu(MenuId::kViewer);

@@ -27,7 +27,8 @@ void menu_items(const SciMachine& m, const SciSceneInput& in, hal::OverlayScene&
         const bool lit = static_cast<int>(k) == m.highlighted();
         const hal::Rgba8 fill = lit ? kHighlight : kItem;
         if (i.sector) {
-            s.sectors.add({i.cx, i.cy, i.r_inner, i.r_outer, i.start_deg, i.end_deg, 2, fill, kItemBorder});
+            s.sectors.add(
+                {i.cx, i.cy, i.r_inner, i.r_outer, i.start_deg, i.end_deg, 2, fill, kItemBorder});
             // The label sits in the sector's middle, clamped into the frame (quadrants
             // reach the corners).
             const float a = (i.start_deg + i.end_deg) / 2 * 3.14159265f / 180.0f;
@@ -35,8 +36,10 @@ void menu_items(const SciMachine& m, const SciSceneInput& in, hal::OverlayScene&
             const float r_mid = i.r_outer - i.r_inner < 0.2f * static_cast<float>(in.height)
                                     ? (i.r_inner + i.r_outer) / 2
                                     : (i.r_inner + r) / 2 + 0.05f * static_cast<float>(in.height);
-            const float x = std::clamp(i.cx + r_mid * std::cos(a), size * 3, static_cast<float>(in.width) - size * 3);
-            const float y = std::clamp(i.cy + r_mid * std::sin(a), size, static_cast<float>(in.height) - size);
+            const float x = std::clamp(i.cx + r_mid * std::cos(a), size * 3,
+                                       static_cast<float>(in.width) - size * 3);
+            const float y =
+                std::clamp(i.cy + r_mid * std::sin(a), size, static_cast<float>(in.height) - size);
             s.texts.add(text(i.label, x, y, size, hal::SceneText::Align::kCentre));
         } else {
             s.quads.add({i.x, i.y, i.width, i.height, i.height / 5, 2, fill, kItemBorder});
@@ -46,7 +49,8 @@ void menu_items(const SciMachine& m, const SciSceneInput& in, hal::OverlayScene&
     }
 }
 
-void viewer(const SciMachine& m, const SciParams& p, const SciSceneInput& in, hal::OverlayScene& s) {
+void viewer(const SciMachine& m, const SciParams& p, const SciSceneInput& in,
+            hal::OverlayScene& s) {
     const float w = static_cast<float>(in.width), h = static_cast<float>(in.height);
     // Three-level: the upper-right window (fig. 4.34b); buttons: left of the column;
     // ring: inside the sub-ring.
@@ -55,14 +59,20 @@ void viewer(const SciMachine& m, const SciParams& p, const SciSceneInput& in, ha
     if (p.layout == SciLayout::kRing) iw = ih = 0.40f * h, x = w / 2 - iw / 2, y = h / 2 - ih / 2;
     const int n = p.image_counts[static_cast<std::size_t>(m.modality())];
     char caption[96];
-    std::snprintf(caption, sizeof caption, "%s %d/%d %.*s", m.modality() == SciModality::kCt ? "CT"
-                  : m.modality() == SciModality::kMri ? "MRI" : "X-ray",
-                  n > 0 ? m.image_index() + 1 : 0, n, static_cast<int>(std::min<std::size_t>(in.image_name.size(), 60)),
+    std::snprintf(caption, sizeof caption, "%s %d/%d %.*s",
+                  m.modality() == SciModality::kCt    ? "CT"
+                  : m.modality() == SciModality::kMri ? "MRI"
+                                                      : "X-ray",
+                  n > 0 ? m.image_index() + 1 : 0, n,
+                  static_cast<int>(std::min<std::size_t>(in.image_name.size(), 60)),
                   in.image_name.data());
     s.quads.add({x - 4, y - 4, iw + 8, ih + 8 + h / 20, 6, 0, kPanel, {}});
-    if (in.image_slot >= 0) s.images.add({in.image_slot, x, y, iw, ih, 1});
-    else s.texts.add(text(n == 0 ? std::string_view("no images in the media folder") : in.image_message,
-                          x + iw / 2, y + ih / 2, h / 30, hal::SceneText::Align::kCentre));
+    if (in.image_slot >= 0)
+        s.images.add({in.image_slot, x, y, iw, ih, 1});
+    else
+        s.texts.add(
+            text(n == 0 ? std::string_view("no images in the media folder") : in.image_message,
+                 x + iw / 2, y + ih / 2, h / 30, hal::SceneText::Align::kCentre));
     s.texts.add(text(caption, x, y + ih + 6, h / 30, hal::SceneText::Align::kTopLeft));
 }
 
@@ -75,8 +85,9 @@ void record(const SciSceneInput& in, hal::OverlayScene& s) {
     const float x = in.tip_x - pw / 2, y = in.tip_y - ph / 2;
     s.quads.add({x, y, pw, ph, 8, 2, {245, 245, 235, 200}, {60, 60, 60, 220}});
     for (std::size_t k = 0; k < n; ++k) {
-        hal::SceneText t = text(in.record_lines[k], x + line / 2, y + line / 2 + line * static_cast<float>(k),
-                                line * 0.9f, hal::SceneText::Align::kTopLeft);
+        hal::SceneText t =
+            text(in.record_lines[k], x + line / 2, y + line / 2 + line * static_cast<float>(k),
+                 line * 0.9f, hal::SceneText::Align::kTopLeft);
         t.colour = {10, 10, 20, 255};
         s.texts.add(t);
     }
@@ -84,9 +95,9 @@ void record(const SciSceneInput& in, hal::OverlayScene& s) {
 
 void box(const SciMachine& m, const SciParams& p, const SciSceneInput& in, hal::OverlayScene& s) {
     if (!s.camera.valid()) {
-        s.texts.add(text("Image box: no calibrated camera (board: calibration)", static_cast<float>(in.width) / 2,
-                         static_cast<float>(in.height) / 2, static_cast<float>(in.height) / 24,
-                         hal::SceneText::Align::kCentre));
+        s.texts.add(text("Image box: no calibrated camera (board: calibration)",
+                         static_cast<float>(in.width) / 2, static_cast<float>(in.height) / 2,
+                         static_cast<float>(in.height) / 24, hal::SceneText::Align::kCentre));
         return;
     }
     hal::SceneBox b;
@@ -119,12 +130,14 @@ void suture(const SciMachine& m, const SciSceneInput& in, hal::OverlayScene& s) 
     if (in.suture_in_mm) {
         hal::SceneLine3 l;
         for (const Vec3d& v : nodes)
-            l.points[l.count++] = {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
+            l.points[l.count++] = {static_cast<float>(v.x), static_cast<float>(v.y),
+                                   static_cast<float>(v.z)};
         l.width_px = 3, l.colour = colour;
         s.lines3.add(l);
     } else {
         hal::SceneLine l;
-        for (const Vec3d& v : nodes) l.points[l.count++] = {static_cast<float>(v.x), static_cast<float>(v.y)};
+        for (const Vec3d& v : nodes)
+            l.points[l.count++] = {static_cast<float>(v.x), static_cast<float>(v.y)};
         l.width_px = 3, l.colour = colour;
         s.lines.add(l);
     }
@@ -139,36 +152,48 @@ void set_text(hal::SceneText& t, std::string_view s) {
     t.utf8[n] = 0;
 }
 
-void build_sci_scene(const SciMachine& m, const SciParams& p, const SciSceneInput& in, hal::OverlayScene& s) {
+void build_sci_scene(const SciMachine& m, const SciParams& p, const SciSceneInput& in,
+                     hal::OverlayScene& s) {
     const hal::SceneCamera camera = s.camera;
     s.clear();
     s.camera = camera;
     if (m.state() == SciState::kActivating) {
         const float x0 = m.activation_x0(), y0 = m.activation_y0();
-        s.quads.add({x0, y0, m.activation_x1() - x0, static_cast<float>(in.height) - y0, 0, 0, kArea, {}});
+        s.quads.add(
+            {x0, y0, m.activation_x1() - x0, static_cast<float>(in.height) - y0, 0, 0, kArea, {}});
         s.discs.add({in.gesture_x, in.gesture_y, 0.03f * static_cast<float>(in.height),
-                     0.04f * static_cast<float>(in.height), static_cast<float>(360 * m.activation_fraction()),
-                     kHighlight});
+                     0.04f * static_cast<float>(in.height),
+                     static_cast<float>(360 * m.activation_fraction()), kHighlight});
         return;
     }
     if (!m.active()) return;
     switch (m.menu().id) {
-        case MenuId::kViewer: viewer(m, p, in, s); break;
-        case MenuId::kRecord: record(in, s); break;
-        case MenuId::kBox: box(m, p, in, s); break;
-        case MenuId::kSuture: suture(m, in, s); break;
-        default: break;
+        case MenuId::kViewer:
+            viewer(m, p, in, s);
+            break;
+        case MenuId::kRecord:
+            record(in, s);
+            break;
+        case MenuId::kBox:
+            box(m, p, in, s);
+            break;
+        case MenuId::kSuture:
+            suture(m, in, s);
+            break;
+        default:
+            break;
     }
     menu_items(m, in, s);
     if (m.state() == SciState::kConfirm) {
         const float w = static_cast<float>(in.width), h = static_cast<float>(in.height);
         s.quads.add({0.3f * w, 0.42f * h, 0.4f * w, 0.16f * h, 10, 2, kPanel, kHighlight});
-        s.texts.add(text("Confirm: loop the tool within 2 s", w / 2, h / 2, h / 24, hal::SceneText::Align::kCentre));
+        s.texts.add(text("Confirm: loop the tool within 2 s", w / 2, h / 2, h / 24,
+                         hal::SceneText::Align::kCentre));
     }
     if (in.has_tip && m.dwell_fraction() > 0) {
         const float h = static_cast<float>(in.height);
-        s.discs.add({in.tip_x, in.tip_y, 0.035f * h, 0.045f * h, static_cast<float>(360 * m.dwell_fraction()),
-                     kHighlight});
+        s.discs.add({in.tip_x, in.tip_y, 0.035f * h, 0.045f * h,
+                     static_cast<float>(360 * m.dwell_fraction()), kHighlight});
     }
 }
 

@@ -22,8 +22,8 @@ SciGesture to_sci_gesture(int label) {
 }  // namespace
 
 SciStage::SciStage(SciParams params, const vision::ToolTrackingStage* tracking,
-                   const vision::GestureStage* gestures, hal::OverlayRenderer* renderer, app::Log& log,
-                   SciMedia media)
+                   const vision::GestureStage* gestures, hal::OverlayRenderer* renderer,
+                   app::Log& log, SciMedia media)
     : params_(params),
       tracking_(tracking),
       gestures_(gestures),
@@ -46,7 +46,8 @@ void SciStage::configure(const hal::FrameFormat& format) {
     // context is current on one thread): on the first frame of this format.
     renderer_configured_ = false;
     if (renderer_ == nullptr && !said_no_renderer_) {
-        log_.printf(app::LogLevel::kInfo, "sci: no overlay renderer; the SCI runs and traces, its overlay is not drawn");
+        log_.printf(app::LogLevel::kInfo,
+                    "sci: no overlay renderer; the SCI runs and traces, its overlay is not drawn");
         said_no_renderer_ = true;
     }
 }
@@ -55,15 +56,17 @@ void SciStage::configure_renderer() {
     renderer_configured_ = true;
     if (!renderer_->configure(width_, height_)) {
         log_.printf(app::LogLevel::kWarning,
-                    "sci: the overlay renderer %.*s cannot draw %dx%d: %s; the SCI runs without its overlay",
-                    static_cast<int>(renderer_->name().size()), renderer_->name().data(), width_, height_,
-                    renderer_->error().c_str());
+                    "sci: the overlay renderer %.*s cannot draw %dx%d: %s; the SCI runs without "
+                    "its overlay",
+                    static_cast<int>(renderer_->name().size()), renderer_->name().data(), width_,
+                    height_, renderer_->error().c_str());
         renderer_ = nullptr;
         return;
     }
     for (std::size_t i = 0; i < media_.uploads.size(); ++i)
         if (!renderer_->set_image(static_cast<int>(i), media_.uploads[i]))
-            log_.printf(app::LogLevel::kWarning, "sci: image %zu not registered with the renderer: %s", i,
+            log_.printf(app::LogLevel::kWarning,
+                        "sci: image %zu not registered with the renderer: %s", i,
                         renderer_->error().c_str());
 }
 
@@ -98,14 +101,19 @@ void SciStage::process(app::AnalysisContext& ctx) {
 
     const SciMachine& m = machine_;
     ctx.trace.begin_object("sci").field("state", to_string(m.state()));
-    if (m.active()) ctx.trace.field("menu", to_string(m.menu().id));
-    else ctx.trace.null_field("menu");
+    if (m.active())
+        ctx.trace.field("menu", to_string(m.menu().id));
+    else
+        ctx.trace.null_field("menu");
     if (m.active() && m.highlighted() >= 0)
-        ctx.trace.field("highlighted", m.menu().items[static_cast<std::size_t>(m.highlighted())].label);
+        ctx.trace.field("highlighted",
+                        m.menu().items[static_cast<std::size_t>(m.highlighted())].label);
     else
         ctx.trace.null_field("highlighted");
-    if (!m.event().empty()) ctx.trace.field("event", m.event());
-    else ctx.trace.null_field("event");
+    if (!m.event().empty())
+        ctx.trace.field("event", m.event());
+    else
+        ctx.trace.null_field("event");
     ctx.trace.end_object();
 
     SciSceneInput in;
@@ -119,9 +127,11 @@ void SciStage::process(app::AnalysisContext& ctx) {
         in.image_name = media_.names[mod][k];
         in.image_slot = media_.slots[mod][k];
     }
-    in.image_message = media_.message.empty() ? std::string_view("image not loaded") : std::string_view(media_.message);
+    in.image_message = media_.message.empty() ? std::string_view("image not loaded")
+                                              : std::string_view(media_.message);
     in.record_lines = record_view_;
-    in.suture_in_mm = f.tool_count >= 2 && f.tools[0].has_3d && f.tools[1].has_3d && scene_.camera.valid();
+    in.suture_in_mm =
+        f.tool_count >= 2 && f.tools[0].has_3d && f.tools[1].has_3d && scene_.camera.valid();
     build_sci_scene(m, params_, in, scene_);
 
     if (renderer_ != nullptr && !renderer_configured_) configure_renderer();
@@ -129,7 +139,8 @@ void SciStage::process(app::AnalysisContext& ctx) {
     drawn_.count = 0;
     if (!renderer_->render(scene_, ctx.overlay.layer(), drawn_)) {
         if (!said_render_error_)
-            log_.printf(app::LogLevel::kWarning, "sci: overlay render failed: %s", renderer_->error().c_str());
+            log_.printf(app::LogLevel::kWarning, "sci: overlay render failed: %s",
+                        renderer_->error().c_str());
         said_render_error_ = true;
         return;
     }

@@ -105,7 +105,8 @@ TEST(SutureThread, ExplicitEulerFirstSteps) {
     // Sub-step 1: x += v dt (v = 0), v += g dt. Sub-step 2: x += g dt^2 (no spring force yet).
     t.step(a, b, 2 * SutureThread::kStepS);
     const double dt = SutureThread::kStepS;
-    for (int i = 1; i + 1 < SutureThread::kNodes; ++i) EXPECT_NEAR(t.nodes()[i].y, 2000 * dt * dt, 1e-12);
+    for (int i = 1; i + 1 < SutureThread::kNodes; ++i)
+        EXPECT_NEAR(t.nodes()[i].y, 2000 * dt * dt, 1e-12);
     EXPECT_DOUBLE_EQ(t.nodes()[0].y, 0);
     EXPECT_DOUBLE_EQ(t.nodes()[SutureThread::kNodes - 1].y, 0);
 }

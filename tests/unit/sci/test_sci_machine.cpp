@@ -21,8 +21,8 @@ struct Driver {
     explicit Driver(SciParams p = {}) : m(p) { m.configure(kW, kH); }
 
     // One frame at time `at` with the cursor at (x, y) (x < 0: no tool).
-    void frame(hal::Nanos at, double x, double y, SciGesture g = SciGesture::kNone, double held_ms = 0,
-               bool fired = false, std::vector<hal::ControlEvent> events = {}) {
+    void frame(hal::Nanos at, double x, double y, SciGesture g = SciGesture::kNone,
+               double held_ms = 0, bool fired = false, std::vector<hal::ControlEvent> events = {}) {
         SciFrame f;
         t = at;
         f.t_ns = at;
@@ -37,7 +37,8 @@ struct Driver {
         m.step(f);
     }
     void press(hal::Nanos at, double x, double y) {
-        frame(at, x, y, SciGesture::kNone, 0, false, {{hal::ControlEvent::Kind::kButtonPress, 0, 0, 0}});
+        frame(at, x, y, SciGesture::kNone, 0, false,
+              {{hal::ControlEvent::Kind::kButtonPress, 0, 0, 0}});
     }
     void wheel(hal::Nanos at, int delta) {
         frame(at, kW / 2.0, kH / 2.0, SciGesture::kNone, 0, false,
@@ -54,7 +55,8 @@ struct Driver {
             const SciItem& i = m.menu().items[k];
             if (i.label != label) continue;
             if (!i.sector) return {i.x + i.width / 2, i.y + i.height / 2};
-            const double a = (i.start_deg + i.end_deg) / 2 * M_PI / 180, r = (i.r_inner + std::min(i.r_outer, i.r_inner + 60)) / 2;
+            const double a = (i.start_deg + i.end_deg) / 2 * M_PI / 180,
+                         r = (i.r_inner + std::min(i.r_outer, i.r_inner + 60)) / 2;
             return {i.cx + r * std::cos(a), i.cy + r * std::sin(a)};
         }
         ADD_FAILURE() << "no item " << label << " in " << menu();
@@ -143,13 +145,15 @@ TEST(SciMachine, ScissorsHeldThreeSecondsInTheAreaActivates) {
     for (int k = 0; k <= 100; ++k) d.frame(k * 40 * kMs, 320, 100, SciGesture::kScissors, k * 40.0);
     EXPECT_EQ(d.m.state(), SciState::kInactive);
     // Another gesture inside the area: never.
-    for (int k = 0; k <= 100; ++k) d.frame((200 + k) * 40 * kMs, 320, 450, SciGesture::kOpenGrasper, k * 40.0);
+    for (int k = 0; k <= 100; ++k)
+        d.frame((200 + k) * 40 * kMs, 320, 450, SciGesture::kOpenGrasper, k * 40.0);
     EXPECT_EQ(d.m.state(), SciState::kInactive);
     const hal::Nanos t0 = 400 * 40 * kMs;
     d.frame(t0, 320, 450, SciGesture::kScissors, 0);
     EXPECT_EQ(d.event(), "activation_start");
     EXPECT_EQ(d.m.state(), SciState::kActivating);
-    for (int k = 1; k < 75; ++k) d.frame(t0 + k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
+    for (int k = 1; k < 75; ++k)
+        d.frame(t0 + k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
     EXPECT_EQ(d.m.state(), SciState::kActivating);  // 2.96 s
     d.frame(t0 + 3000 * kMs, 320, 450, SciGesture::kScissors, 3000.0);
     EXPECT_EQ(d.event(), "activate_hold");
@@ -160,7 +164,8 @@ TEST(SciMachine, MovingTheScissorsRestartsTheActivation) {
     Driver d;
     for (int k = 0; k < 50; ++k) d.frame(k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
     // The gesture stage restarted its hold (the tip moved): so does the SCI.
-    for (int k = 0; k < 75; ++k) d.frame((50 + k) * 40 * kMs, 330, 450, SciGesture::kScissors, k * 40.0);
+    for (int k = 0; k < 75; ++k)
+        d.frame((50 + k) * 40 * kMs, 330, 450, SciGesture::kScissors, k * 40.0);
     EXPECT_EQ(d.m.state(), SciState::kActivating);
     d.frame(125 * 40 * kMs, 330, 450, SciGesture::kScissors, 3000.0);
     EXPECT_EQ(d.event(), "activate_hold");
@@ -201,7 +206,8 @@ TEST(SciMachine, AnyOtherMotionDeniesAfterTwoSeconds) {
     d.frame(40 * kMs, x, y);
     d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
     // A straight stroke to the right and back: no loop.
-    for (int k = 1; k < 50; ++k) d.frame(1000 * kMs + k * 40 * kMs, x + 4.0 * (k < 25 ? k : 50 - k), y);
+    for (int k = 1; k < 50; ++k)
+        d.frame(1000 * kMs + k * 40 * kMs, x + 4.0 * (k < 25 ? k : 50 - k), y);
     EXPECT_EQ(d.m.state(), SciState::kConfirm);  // 1.96 s
     d.frame(3000 * kMs, x, y);
     EXPECT_EQ(d.event(), "deny");
@@ -292,7 +298,8 @@ TEST(SciMachine, WheelMovesTheHighlightAndThroughImages) {
 TEST(SciMachine, LongPressDeactivates) {
     Driver d;
     d.press(0, 320, 240);
-    d.frame(800 * kMs, 320, 240, SciGesture::kNone, 0, false, {{hal::ControlEvent::Kind::kLongPress, 0, 0, 0}});
+    d.frame(800 * kMs, 320, 240, SciGesture::kNone, 0, false,
+            {{hal::ControlEvent::Kind::kLongPress, 0, 0, 0}});
     EXPECT_EQ(d.event(), "deactivate");
     EXPECT_EQ(d.m.state(), SciState::kInactive);
 }
@@ -330,7 +337,8 @@ TEST(SciScene, ThreeLevelMainMenuItemsAtTheirPlaces) {
     d.frame(1040 * kMs, x, y);
     hal::OverlayScene s;
     SciSceneInput in;
-    in.width = kW, in.height = kH, in.has_tip = true, in.tip_x = static_cast<float>(x), in.tip_y = static_cast<float>(y);
+    in.width = kW, in.height = kH, in.has_tip = true, in.tip_x = static_cast<float>(x),
+    in.tip_y = static_cast<float>(y);
     build_sci_scene(d.m, SciParams{}, in, s);
     ASSERT_EQ(s.quads.count, 4u);
     ASSERT_EQ(s.texts.count, 4u);

@@ -23,7 +23,8 @@ namespace fs = std::filesystem;
 using endotower::test::run_endotower;
 
 fs::path temp_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("endotower_sci_" + name + "_" + std::to_string(::getpid()));
+    const fs::path d =
+        fs::temp_directory_path() / ("endotower_sci_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -35,23 +36,32 @@ struct Step {
     bool operator==(const Step&) const = default;
 };
 std::ostream& operator<<(std::ostream& o, const Step& s) {
-    return o << "{" << s.frame << " " << s.state << " " << s.menu << " " << s.highlighted << " " << s.event << "}";
+    return o << "{" << s.frame << " " << s.state << " " << s.menu << " " << s.highlighted << " "
+             << s.event << "}";
 }
-std::string text(const nlohmann::json& v) { return v.is_null() ? "-" : v.get<std::string>(); }
+std::string text(const nlohmann::json& v) {
+    return v.is_null() ? "-" : v.get<std::string>();
+}
 
 TEST(SciScenario, RingMenuExactSequence) {
     const fs::path dir = temp_dir("ring");
     const std::string src = ENDOTOWER_SOURCE_DIR;
-    auto scene = run_endotower("scene --scenario " + src + "/board/sim/scenarios/sci_ring_dwell.yaml --out " +
-                               (dir / "scene").string());
+    auto scene =
+        run_endotower("scene --scenario " + src +
+                      "/board/sim/scenarios/sci_ring_dwell.yaml --out " + (dir / "scene").string());
     ASSERT_EQ(scene.status, 0) << scene.output;
-    std::ofstream(dir / "board.yaml") << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n"
-                                         "  tool_model: " << src << "/board/sim/models/tool_likelihood.bin\n"
-                                         "sci:\n  layout: ring\n  media: " << src << "/board/sim/sci_media\n";
-    auto sim = run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
-                             (dir / "scene/frames").string() + " --events " + src +
-                             "/board/sim/scenarios/sci_ring_dwell_events.txt --out " + (dir / "o.avi").string() +
-                             " --trace " + (dir / "trace.jsonl").string());
+    std::ofstream(dir / "board.yaml")
+        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n"
+           "  tool_model: "
+        << src
+        << "/board/sim/models/tool_likelihood.bin\n"
+           "sci:\n  layout: ring\n  media: "
+        << src << "/board/sim/sci_media\n";
+    auto sim =
+        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
+                      (dir / "scene/frames").string() + " --events " + src +
+                      "/board/sim/scenarios/sci_ring_dwell_events.txt --out " +
+                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
     ASSERT_EQ(sim.status, 0) << sim.output;
 
     std::vector<Step> events, every;
@@ -60,9 +70,10 @@ TEST(SciScenario, RingMenuExactSequence) {
         const nlohmann::json j = nlohmann::json::parse(line);
         ASSERT_TRUE(j.contains("sci")) << line;
         const nlohmann::json& s = j["sci"];
-        for (const char* k : {"state", "menu", "highlighted", "event"}) ASSERT_TRUE(s.contains(k)) << k;
-        const Step st{j["frame"].get<int>(), text(s["state"]), text(s["menu"]), text(s["highlighted"]),
-                      text(s["event"])};
+        for (const char* k : {"state", "menu", "highlighted", "event"})
+            ASSERT_TRUE(s.contains(k)) << k;
+        const Step st{j["frame"].get<int>(), text(s["state"]), text(s["menu"]),
+                      text(s["highlighted"]), text(s["event"])};
         every.push_back(st);
         if (st.event != "-") events.push_back(st);
     }
@@ -96,18 +107,21 @@ TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
     std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";
     auto r = run_endotower("sim --board " + (dir / "a.yaml").string() + " --input x --out o.avi");
     EXPECT_EQ(r.status, 2);
-    EXPECT_NE(r.output.find("a.yaml:4: field 'sci.dwel_ms': unknown key"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("a.yaml:4: field 'sci.dwel_ms': unknown key"), std::string::npos)
+        << r.output;
     std::ofstream(dir / "b.yaml") << "board: t\nsci:\n  layout: pie\n";
     r = run_endotower("sim --board " + (dir / "b.yaml").string() + " --input x --out o.avi");
     EXPECT_EQ(r.status, 2);
-    EXPECT_NE(r.output.find("b.yaml:3: field 'sci.layout': unknown layout 'pie' (expected buttons, ring or three_level)"),
+    EXPECT_NE(r.output.find("b.yaml:3: field 'sci.layout': unknown layout 'pie' (expected buttons, "
+                            "ring or three_level)"),
               std::string::npos)
         << r.output;
     std::ofstream(dir / "c.yaml") << "board: t\nsci:\n  dwell_ms: 50\n";
     r = run_endotower("sim --board " + (dir / "c.yaml").string() + " --input x --out o.avi");
     EXPECT_EQ(r.status, 2);
-    EXPECT_NE(r.output.find("c.yaml:3: field 'sci.dwell_ms': must be between 100 and 60000, got 50"),
-              std::string::npos)
+    EXPECT_NE(
+        r.output.find("c.yaml:3: field 'sci.dwell_ms': must be between 100 and 60000, got 50"),
+        std::string::npos)
         << r.output;
     fs::remove_all(dir);
 }

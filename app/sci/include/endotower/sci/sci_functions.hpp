@@ -51,10 +51,10 @@ private:
 };
 
 struct SutureParams {
-    double length_mm = 60;       // rest length of the whole thread
-    double stiffness = 20000;    // per unit mass, 1/s^2
-    double damping = 40;         // per unit mass, 1/s
-    double gravity_mm_s2 = 2000; // along +y (down in the image); a wet thread in fluid
+    double length_mm = 60;        // rest length of the whole thread
+    double stiffness = 20000;     // per unit mass, 1/s^2
+    double damping = 40;          // per unit mass, 1/s
+    double gravity_mm_s2 = 2000;  // along +y (down in the image); a wet thread in fluid
 };
 
 class SutureThread {

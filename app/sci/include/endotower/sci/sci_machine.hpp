@@ -29,7 +29,14 @@
 
 namespace endotower::sci {
 
-enum class SciState : std::uint8_t { kInactive, kActivating, kMenu, kHighlight, kConfirm, kGrabbed };
+enum class SciState : std::uint8_t {
+    kInactive,
+    kActivating,
+    kMenu,
+    kHighlight,
+    kConfirm,
+    kGrabbed
+};
 std::string_view to_string(SciState s);
 
 enum class SciGesture : std::uint8_t { kNone, kOpenGrasper, kScissors, kCross, kOther };

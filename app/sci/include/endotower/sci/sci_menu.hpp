@@ -33,7 +33,16 @@ enum class SciModality : std::uint8_t { kCt, kXray, kMri };
 constexpr std::size_t kModalityCount = 3;
 std::string_view to_string(SciModality m);  // "ct" | "xray" | "mri": the media sub-folders
 
-enum class MenuId : std::uint8_t { kMain, kQuadrant, kImages, kEffects, kViewer, kRecord, kBox, kSuture };
+enum class MenuId : std::uint8_t {
+    kMain,
+    kQuadrant,
+    kImages,
+    kEffects,
+    kViewer,
+    kRecord,
+    kBox,
+    kSuture
+};
 constexpr std::size_t kMenuCount = 8;
 // The trace's "menu": main, quadrant, preoperative_images, 3d_effects, viewer,
 // patient_record, image_box, suture.
@@ -58,7 +67,7 @@ struct SciItem {
     MenuId target = MenuId::kMain;
     SciModality modality = SciModality::kCt;
     bool sector = false;
-    float x = 0, y = 0, width = 0, height = 0;                             // a rectangle
+    float x = 0, y = 0, width = 0, height = 0;                                   // a rectangle
     float cx = 0, cy = 0, r_inner = 0, r_outer = 0, start_deg = 0, end_deg = 0;  // a sector
 };
 

@@ -47,8 +47,9 @@ struct SciMedia {
 
 class SciStage final : public app::AnalysisStage {
 public:
-    SciStage(SciParams params, const vision::ToolTrackingStage* tracking, const vision::GestureStage* gestures,
-             hal::OverlayRenderer* renderer, app::Log& log, SciMedia media = {});
+    SciStage(SciParams params, const vision::ToolTrackingStage* tracking,
+             const vision::GestureStage* gestures, hal::OverlayRenderer* renderer, app::Log& log,
+             SciMedia media = {});
     std::string_view name() const override { return "sci"; }
     void configure(const hal::FrameFormat& format) override;
     void process(app::AnalysisContext& ctx) override;
