@@ -3,7 +3,8 @@
 # recordings with no handle events through `endotower sim` with the sim board (the
 # likelihood tracker, gestures, sci on) and counts, from the traces, the frames whose
 # "sci" event is an activation (activate_hold, quadrant, activate_button) and the
-# near misses (activation_start: scissors seen still in the activation area).
+# near misses (activation_start: scissors seen still in the activation area) and the
+# longest time spent activating (the hold needs 3 s).
 # Inputs: the real cholecystectomy clip ../shared/data/sznitman_lap (skipped when
 # absent), the bundled clip, and the table 4.1 scene suites rendered at FRAMES frames
 # each (default 125 = 5 s at 25 fps; longer than the 3 s hold).
@@ -25,7 +26,7 @@ for s in t41_speed_0_4 t41_speed_4_8 t41_speed_8_up t41_distractors t41_light_0_
 done
 total_s=0
 total_act=0
-printf "%-20s %8s %12s %12s\n" input seconds activations near_misses
+printf "%-20s %8s %12s %12s %16s\n" input seconds activations near_misses longest_hold_s
 for entry in "${inputs[@]}"; do
     name=${entry%%=*}
     input=${entry#*=}
@@ -37,8 +38,14 @@ lines = [json.loads(l) for l in open(sys.argv[1])]
 events = [l.get("sci", {}).get("event") for l in lines]
 act = sum(e in ("activate_hold", "quadrant", "activate_button") for e in events)
 near = sum(e == "activation_start" for e in events)
+# The longest run of "activating" frames: how close it came to the 3 s hold.
+longest = run = 0
+for l in lines:
+    run = run + 1 if l.get("sci", {}).get("state") == "activating" else 0
+    longest = max(longest, run)
+period = (lines[1]["capture_ns"] - lines[0]["capture_ns"]) / 1e9
 secs = (lines[-1]["capture_ns"] - lines[0]["capture_ns"]) / 1e9 + (lines[1]["capture_ns"] - lines[0]["capture_ns"]) / 1e9
-print("%-20s %8.2f %12d %12d" % (sys.argv[2], secs, act, near))
+print("%-20s %8.2f %12d %12d %16.2f" % (sys.argv[2], secs, act, near, longest * period))
 open(sys.argv[1] + ".sum", "w").write("%f %d\n" % (secs, act))
 PY
     read -r s a < "$out/$name.jsonl.sum"

@@ -1,4 +1,4 @@
-// The SCI end to end: `endotower scene` renders board/sim/scenarios/sci_ring_dwell.yaml
+// The SCI end to end: `endotower scene` renders tests/unit/sci/data/sci_ring_dwell.yaml
 // (a grasper pointing at the ring menu), `endotower sim` replays it with the handle
 // timeline next to it and the likelihood tracker; the trace's "sci" members must give
 // exactly the expected sequence: button activation, the tip's highlight of CT and its
@@ -48,7 +48,7 @@ TEST(SciScenario, RingMenuExactSequence) {
     const std::string src = ENDOTOWER_SOURCE_DIR;
     auto scene =
         run_endotower("scene --scenario " + src +
-                      "/board/sim/scenarios/sci_ring_dwell.yaml --out " + (dir / "scene").string());
+                      "/tests/unit/sci/data/sci_ring_dwell.yaml --out " + (dir / "scene").string());
     ASSERT_EQ(scene.status, 0) << scene.output;
     std::ofstream(dir / "board.yaml")
         << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n"
@@ -60,7 +60,7 @@ TEST(SciScenario, RingMenuExactSequence) {
     auto sim =
         run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
                       (dir / "scene/frames").string() + " --events " + src +
-                      "/board/sim/scenarios/sci_ring_dwell_events.txt --out " +
+                      "/tests/unit/sci/data/sci_ring_dwell_events.txt --out " +
                       (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
     ASSERT_EQ(sim.status, 0) << sim.output;
 
