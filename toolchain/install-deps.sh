@@ -18,6 +18,8 @@ packages=(
   # display driver (issue 9): DRM/KMS, GBM, EGL, GLES2; Mesa's llvmpipe for the headless
   # overlay test and for vkms in the guest
   libdrm-dev libgbm-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
+  # overlay renderer (issue 8): FreeType and the DejaVu font for text; DCMTK for DICOM
+  libfreetype-dev fonts-dejavu-core libdcmtk-dev
 )
 
 missing=()

@@ -3,7 +3,7 @@
 #include <dcmtk/config/osconfig.h>  // first, as DCMTK requires
 #include <dcmtk/dcmdata/dcdeftag.h>
 #include <dcmtk/dcmdata/dcfilefo.h>
-#include <dcmtk/dcmdata/dcistrmb.h>
+#include <dcmtk/dcmdata/dcstack.h>
 #include <dcmtk/dcmdata/dcrledrg.h>
 #include <dcmtk/dcmimage/diregist.h>  // colour images
 #include <dcmtk/dcmimgle/dcmimage.h>
@@ -42,29 +42,34 @@ bool is_dicom(const std::uint8_t* data, std::size_t size) {
     return size >= 132 && std::memcmp(data + 128, "DICM", 4) == 0;
 }
 
-bool decode_dicom(const std::uint8_t* data, std::size_t size, const std::string& name,
-                  MediaImage& out, std::string& error) {
+// From the file, not from memory: DCMTK allocates an element's declared length when it
+// reads it from memory, so a corrupt length field would ask for gigabytes. From a
+// file, values over 64 KiB are only loaded when used, after the check below.
+bool decode_dicom(const std::string& path, std::uintmax_t file_size, MediaImage& out,
+                  std::string& error) {
     init_dcmtk();
-    DcmInputBufferStream stream;
-    stream.setBuffer(data, static_cast<offile_off_t>(size));
-    stream.setEos();
     DcmFileFormat file;
-    file.transferInit();
-    const OFCondition read = file.read(stream);
-    file.transferEnd();
-    if (read.bad()) return fail(error, name, std::string("not a readable DICOM file (") + read.text() + ")");
+    const OFCondition read = file.loadFile(OFFilename(path.c_str()), EXS_Unknown, EGL_noChange, 65536);
+    if (read.bad()) return fail(error, path, std::string("not a readable DICOM file (") + read.text() + ")");
+    DcmStack stack;
+    while (file.nextObject(stack, OFTrue).good()) {
+        const Uint32 length = stack.top()->getLengthField();
+        if (length != DCM_UndefinedLength && length > file_size)
+            return fail(error, path, "corrupt DICOM file (element " + std::string(stack.top()->getTag().toString().c_str()) +
+                                         " longer than the file)");
+    }
     DcmDataset* ds = file.getDataset();
     Uint16 rows = 0, cols = 0;
     if (ds->findAndGetUint16(DCM_Rows, rows).bad() || ds->findAndGetUint16(DCM_Columns, cols).bad() ||
         rows == 0 || cols == 0)
-        return fail(error, name, "DICOM file without an image (no Rows/Columns)");
+        return fail(error, path, "DICOM file without an image (no Rows/Columns)");
     if (rows > MediaImage::kMaxSide || cols > MediaImage::kMaxSide)
-        return fail(error, name, "DICOM image " + std::to_string(cols) + "x" + std::to_string(rows) +
+        return fail(error, path, "DICOM image " + std::to_string(cols) + "x" + std::to_string(rows) +
                                      " larger than " + std::to_string(MediaImage::kMaxSide));
     // The first frame only: a viewer shows one image per file.
     DicomImage image(&file, ds->getOriginalXfer(), CIF_UsePartialAccessToPixelData, 0, 1);
     if (image.getStatus() != EIS_Normal)
-        return fail(error, name, std::string("DICOM image not decodable (") +
+        return fail(error, path, std::string("DICOM image not decodable (") +
                                      DicomImage::getString(image.getStatus()) + ")");
     const bool mono = image.isMonochrome();
     if (mono) {
@@ -74,7 +79,7 @@ bool decode_dicom(const std::uint8_t* data, std::size_t size, const std::string&
     const void* pixels = image.getOutputData(8, 0, 0);
     const auto w = static_cast<int>(image.getWidth()), h = static_cast<int>(image.getHeight());
     if (pixels == nullptr || w <= 0 || h <= 0)
-        return fail(error, name, "DICOM pixel data could not be rendered");
+        return fail(error, path, "DICOM pixel data could not be rendered");
     const auto* p = static_cast<const std::uint8_t*>(pixels);
     out.width = w, out.height = h;
     out.rgba.resize(static_cast<std::size_t>(w) * h * 4);
@@ -140,27 +145,21 @@ bool decode_png_jpeg(const std::uint8_t* data, std::size_t size, const std::stri
 
 }  // namespace
 
-bool decode_media_image(const std::uint8_t* data, std::size_t size, const std::string& name,
-                        MediaImage& out, std::string& error) {
-    out = MediaImage{};
-    out.name = name;
-    if (data == nullptr || size == 0) return fail(error, name, "empty file");
-    const bool ok = is_dicom(data, size) ? decode_dicom(data, size, name, out, error)
-                                         : decode_png_jpeg(data, size, name, out, error);
-    if (!ok) out.rgba.clear(), out.width = out.height = 0;
-    return ok;
-}
-
 bool load_media_image(const std::string& path, MediaImage& out, std::string& error) {
+    out = MediaImage{};
+    const std::size_t slash = path.find_last_of('/');
+    out.name = slash == std::string::npos ? path : path.substr(slash + 1);
     std::ifstream in(path, std::ios::binary);
     if (!in) return fail(error, path, std::string("cannot open (") + std::strerror(errno) + ")");
     const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
                                           std::istreambuf_iterator<char>());
     if (in.bad()) return fail(error, path, "read error");
-    if (!decode_media_image(bytes.data(), bytes.size(), path, out, error)) return false;
-    const std::size_t slash = path.find_last_of('/');
-    out.name = slash == std::string::npos ? path : path.substr(slash + 1);
-    return true;
+    if (bytes.empty()) return fail(error, path, "empty file");
+    const bool ok = is_dicom(bytes.data(), bytes.size())
+                        ? decode_dicom(path, bytes.size(), out, error)
+                        : decode_png_jpeg(bytes.data(), bytes.size(), path, out, error);
+    if (!ok) out.rgba.clear(), out.width = out.height = 0;
+    return ok;
 }
 
 }  // namespace endotower::media

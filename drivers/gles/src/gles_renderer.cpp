@@ -508,11 +508,22 @@ bool GlesRenderer::render(const hal::OverlayScene& scene, const hal::OverlayLaye
         }
     // Any GL error before compositing: the target stays untouched.
     if (gl_failed("render")) return false;
+    // Straight alpha once per read, not once per composite: kept regions are ready.
+    for (std::size_t i = 0; i < n; ++i)
+        if (read[i]) unpremultiply(&staging_[offset[i]], static_cast<std::size_t>(area_of(regions[i])));
     for (std::size_t i = 0; i < n; ++i) {
         const hal::Rect& r = regions[i];
+        // Outside the layer's rects its pixels are transparent (hal/overlay.hpp).
+        bool transparent = true;
+        for (std::size_t k = 0; k < target.rect_count && k < target.rects.size(); ++k) {
+            const hal::Rect& t = target.rects[k];
+            if (r.x < t.x + t.width && t.x < r.x + r.width && r.y < t.y + t.height &&
+                t.y < r.y + r.height)
+                transparent = false;
+        }
         composite_over(&staging_[offset[i]], r.width, r.height,
                        target.rgba + static_cast<std::ptrdiff_t>(r.y) * target.stride + 4 * r.x,
-                       target.stride);
+                       target.stride, transparent);
     }
     cache_.count = n;
     std::copy_n(regions.begin(), n, cache_.rects.begin());

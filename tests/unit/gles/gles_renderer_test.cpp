@@ -29,13 +29,16 @@ struct Target {
         px.assign(static_cast<std::size_t>(layer.stride) * kH, 0);
         layer.rgba = px.data();
     }
-    // A deterministic pattern with every alpha: transparent, partial and opaque.
+    // A deterministic pattern with every alpha: transparent, partial and opaque; the
+    // layer's rect says so (outside its rects a layer is transparent).
     void pattern() {
         std::uint32_t s = 12345;
         for (auto& b : px) {
             s = s * 1664525u + 1013904223u;
             b = static_cast<std::uint8_t>(s >> 24);
         }
+        layer.rects[0] = {0, 0, kW, kH};
+        layer.rect_count = 1;
     }
     const std::uint8_t* at(int x, int y) const {
         return &px[static_cast<std::size_t>(y) * layer.stride + 4 * static_cast<std::size_t>(x)];
@@ -153,6 +156,32 @@ TEST_F(GlesRendererTest, TranslucentQuadComposesOverWithinTolerance) {
             }
         }
     EXPECT_LE(worst, 1.0);
+}
+
+// Outside the layer's rects the target is transparent: the overlay is written as it
+// is where it shows, and the colour bytes of transparent pixels elsewhere stay.
+TEST_F(GlesRendererTest, TransparentLayerTakesTheOverlayAsIs) {
+    Target t;
+    t.pattern();
+    t.layer.rect_count = 0;
+    for (std::size_t y = 0; y < kH; ++y)
+        for (std::size_t x = 0; x < kW; ++x) t.px[y * t.layer.stride + 4 * x + 3] = 0;
+    hal::OverlayScene scene;
+    const Rgba8 fill{30, 200, 120, 128};
+    scene.quads.add({.x = 10, .y = 10, .width = 50, .height = 40, .fill = fill});
+    const Target after = render(scene, t);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            if (x >= 10 && x < 60 && y >= 10 && y < 50) {
+                const Rgba8 c = after.get(x, y);
+                ASSERT_EQ(c.a, 128);
+                ASSERT_NEAR(c.r, 30, 2);  // 1 + 128 / 128
+                ASSERT_NEAR(c.g, 200, 2);
+                ASSERT_NEAR(c.b, 120, 2);
+            } else {
+                ASSERT_EQ(after.get(x, y), t.get(x, y)) << x << ", " << y;
+            }
+        }
 }
 
 TEST_F(GlesRendererTest, RoundedCornersAndBorder) {

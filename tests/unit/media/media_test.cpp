@@ -162,6 +162,11 @@ TEST_F(MediaTest, BrokenFilesAreRefusedByName) {
     ASSERT_TRUE(cv::imwrite(path("ok.jpg"), flat));
     write_dicom("ok.dcm", std::vector<Uint16>(12, 7), 0, 0);
     const std::string png = read("ok.png"), jpg = read("ok.jpg"), dcm = read("ok.dcm");
+    // The pixel data's length field says 2 GB (explicit VR: tag, "OW", 2 reserved, length).
+    std::string huge = dcm;
+    const std::size_t pix = huge.rfind(std::string("\xE0\x7F\x10\x00OW\0\0", 8));
+    ASSERT_NE(pix, std::string::npos);
+    huge.replace(pix + 8, 4, std::string("\xF0\xFF\xFF\x7F", 4));
     struct Case {
         std::string name, bytes, says;
     };
@@ -169,6 +174,7 @@ TEST_F(MediaTest, BrokenFilesAreRefusedByName) {
         {"cut.png", png.substr(0, png.size() / 2), "truncated PNG"},
         {"cut.jpg", jpg.substr(0, jpg.size() - 10), "truncated JPEG"},
         {"cut.dcm", dcm.substr(0, dcm.size() - 9), "DICOM"},
+        {"huge.dcm", huge, "DICOM"},
         {"junk.jpg", std::string(300, 'x'), "neither DICOM, PNG nor JPEG"},
         {"empty.png", "", "empty file"},
     };

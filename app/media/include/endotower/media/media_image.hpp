@@ -1,13 +1,13 @@
 // MediaImage: one preoperative image decoded to straight-alpha RGBA 8-bit, ready for
 // hal::OverlayRenderer::set_image.
 //
-// decode_media_image(bytes, name): the format is told by the content, not the name:
-// DICOM (the "DICM" mark at byte 128; DCMTK's DicomImage, first frame; monochrome with
-// the file's first VOI window, else the min/max window, to grey; colour as RGB;
-// JPEG/RLE-compressed transfer syntaxes included), PNG or JPEG (OpenCV; grey, RGB or
-// RGBA, 8 or 16 bits). A truncated PNG (no IEND) or JPEG (no end-of-image marker) is
-// refused, as are images larger than kMaxSide on a side.
-// Errors: false, and `error` is "NAME: what is wrong". Never throws.
+// load_media_image(path): the format is told by the content, not the name: DICOM
+// (the "DICM" mark at byte 128; DCMTK's DicomImage, first frame; monochrome with the
+// file's first VOI window, else the min/max window, to grey; colour as RGB; JPEG/RLE
+// transfer syntaxes included), PNG or JPEG (OpenCV; grey, RGB or RGBA, 8 or 16
+// bits). Refused: a truncated PNG (no IEND) or JPEG (no end-of-image marker), a
+// DICOM element longer than the file, images larger than kMaxSide on a side.
+// Errors: false, and `error` is "PATH: what is wrong". Never throws.
 #pragma once
 
 #include <cstddef>
@@ -28,10 +28,6 @@ struct MediaImage {
     hal::ImageView view() const { return {width, height, 4 * width, rgba.data()}; }
 };
 
-bool decode_media_image(const std::uint8_t* data, std::size_t size, const std::string& name,
-                        MediaImage& out, std::string& error);
-
-// Reads `path` and decodes it; `error` names the path.
 bool load_media_image(const std::string& path, MediaImage& out, std::string& error);
 
 }  // namespace endotower::media

@@ -3,12 +3,13 @@
 // render node on a board), else the default display with a 1x1 pbuffer.
 //
 // configure(width, height) creates the offscreen framebuffer (RGBA8 colour, 16-bit
-// depth) of the video frame's size and the glyph atlas (FreeType, `font_path`, sizes
-// 12..64 px). render() draws the scene into the framebuffer with premultiplied alpha,
-// reads back only the rectangles it touched (glReadPixels) and composites them
+// depth) of the video frame's size and the glyph atlas (FreeType, `font_path`, line
+// heights 10..64 px). render() draws the scene into the framebuffer with premultiplied
+// alpha, reads back only the regions it touched (glReadPixels) and composites them
 // "over" the target's straight-alpha pixels on the CPU; every other target pixel is
-// left bit for bit. It allocates nothing (vertex and staging buffers are sized in
-// configure).
+// left bit for bit. Regions unchanged since the last render() are not drawn or read
+// again (a standing menu costs only its composite). It allocates nothing (vertex and
+// staging buffers are sized in configure).
 //
 // Coordinates: 2-D items in pixel edges (a quad at x=10, width 20 covers pixels
 // 10..29); 3-D items through the pinhole u = fx X/Z + cx, v = fy Y/Z + cy (eq. 4.28)
