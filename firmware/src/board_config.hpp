@@ -37,10 +37,24 @@ struct BoardConfig {
     std::string calibration;
     // analysis.gestures (issue 6): on when the map is present
     bool gestures = false;
-    std::string gesture_model;     // a file of 'endotower train-gestures'
+    std::string gesture_model;  // a file of 'endotower train-gestures'
     // analysis.markers (issue 6): strip-marker tracking (docs/markers.md)
     bool markers = false;
+    // analysis.fov_mask: with a calibration, blacken the analysis frame outside the field
+    // of view (CalibrationStage, first in the chain): nothing is detected there
+    bool fov_mask = true;
+    // analysis.regions.mark_with_tool: the surgeon outlines regions with the tool tip
+    // (RegionMarker; a long press starts). Not with sci: (the handle's button is its).
+    bool region_mark_with_tool = false;
     double gesture_hold_ms = 1000.0;  // held still this long before it fires
+
+    // sci: the surgeon-computer interface (issue 8, docs/sci.md); on when the map is present
+    bool sci = false;
+    std::string sci_layout = "three_level";  // "buttons" | "ring" | "three_level"
+    double sci_dwell_ms = 2000, sci_activation_hold_ms = 3000, sci_cross_hold_ms = 1000,
+           sci_confirm_ms = 2000;
+    std::string sci_media;           // folder with ct/, xray/, mri/ image sub-folders
+    std::string sci_patient_record;  // a text file, one line per record line
 
     // display (drivers/display): display.card, .connector, .mode "WxH@HZ", .zero_copy, .atomic
     std::string display_card = "/dev/dri/card0";
@@ -48,7 +62,8 @@ struct BoardConfig {
     int display_width = 1920, display_height = 1080;
     double display_refresh_hz = 60.0;
     bool display_zero_copy = true, display_atomic = true;
-    double latency_budget_ms = 0.0;  // video.latency_budget_ms: capture -> flip limit; 0 = period + 2 ms
+    double latency_budget_ms =
+        0.0;  // video.latency_budget_ms: capture -> flip limit; 0 = period + 2 ms
 
     // paths.storage: a writable directory (selftest checks it); the calibration file is the
     // top-level `calibration`, the gesture model `analysis.gestures.model`

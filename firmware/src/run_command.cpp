@@ -7,22 +7,21 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <thread>
 
+#include "analysis_chain.hpp"
 #include "board_config.hpp"
+#include "endotower/gles/gles_renderer.hpp"
 #include "commands.hpp"
 #include "devices.hpp"
 #include "endotower/app/no_signal_source.hpp"
 #include "endotower/app/pipeline.hpp"
-#include "endotower/app/stage_chain.hpp"
-#include "endotower/app/status_badge.hpp"
 #include "endotower/app/trace_writer.hpp"
 #include "endotower/hal/control_merge.hpp"
 #include "endotower/system/monotonic_clock.hpp"
 #include "endotower/system/syscall.hpp"
 #include "endotower/usb/usb_hotplug.hpp"
-#include "endotower/vision/kalman_tool_tracker.hpp"
-#include "endotower/vision/tool_tracking_stage.hpp"
 
 namespace endotower::firmware {
 
@@ -158,14 +157,23 @@ int run_run_command(const Args& args) {
         return kExitBadInput;
     }
 
-    app::StatusBadge badge;
-    vision::KalmanToolTrackerParams tracker_params;
-    tracker_params.red_binarised = board.tracker == "kalman_red";
-    vision::KalmanToolTracker tracker(tracker_params);
-    vision::ToolTrackingStage tracking(tracker);
-    app::StageChain chain;
-    if (board.stage == "status_badge") chain.add(&badge);
-    if (board.tracker != "none") chain.add(&tracking);
+    // The analysis path, as the board says (the same builder as `endotower sim`).
+    app::StderrLog log;
+    AnalysisChain analysis;
+    // The SCI's overlay is drawn with GLES2 (headless EGL on the host); without one the
+    // SCI still runs and traces.
+    std::unique_ptr<hal::OverlayRenderer> renderer;
+    if (board.sci) {
+        renderer = gles::create_gles_renderer(error);
+        if (!renderer) std::fprintf(stderr, "endotower run: sci: no overlay renderer: %s\n", error.c_str());
+        error.clear();
+    }
+    hal::FrameFormat input{};
+    input.width = board.capture.width, input.height = board.capture.height;
+    if (!analysis.build(board, input, {}, renderer.get(), log, "run", error)) {
+        std::fprintf(stderr, "endotower run: %s\n", error.c_str());
+        return kExitBadInput;
+    }
 
     app::PipelineConfig cfg;
     cfg.latency_ns = static_cast<hal::Nanos>(board.latency_ms * 1e6);
@@ -175,9 +183,8 @@ int run_run_command(const Args& args) {
     cfg.late_tolerance_ns = static_cast<hal::Nanos>(board.late_tolerance_ms * 1e6);
     system::tighten_timer_slack();
 
-    app::StderrLog log;
     app::NoSignalSource source(capture, clock, log);
-    app::Pipeline pipeline(cfg, source, sink, clock, &inputs, chain.size() == 0 ? nullptr : &chain,
+    app::Pipeline pipeline(cfg, source, sink, clock, &inputs, analysis.stage(),
                            trace_path.empty() ? nullptr : &trace, log);
     g_pipeline = &pipeline;
     std::signal(SIGINT, on_run_signal);

@@ -9,7 +9,9 @@
 #include <memory>
 #include <optional>
 
+#include "analysis_chain.hpp"
 #include "board_config.hpp"
+#include "endotower/gles/gles_renderer.hpp"
 #include "endotower/app/pipeline.hpp"
 #include "endotower/app/stage_chain.hpp"
 #include "endotower/app/status_badge.hpp"
@@ -27,7 +29,6 @@
 #include "endotower/eval/derived_truth.hpp"
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
-#include "endotower/vision/strip_marker_stage.hpp"
 #include "endotower/vision/region_stage.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
@@ -187,22 +188,6 @@ int run_sim_command(const Args& args) {
         return kExitBadInput;
     }
 
-    // The scope's calibration: validated now, named in every trace line.
-    std::optional<calibration::CalibrationStage> calibration_stage;
-    calibration::Calibration cal;
-    if (!board.calibration.empty()) {
-        if (!calibration::load_calibration(board.calibration, cal, error)) {
-            std::fprintf(stderr, "endotower sim: %s (calibration in %s)\n", error.c_str(), a.board.c_str());
-            return kExitBadInput;
-        }
-        std::ifstream in(board.calibration, std::ios::binary);
-        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        const std::string hash = calibration::content_hash(bytes);
-        std::printf("calibration: %s (scope %s, model %s, hash %s)\n", board.calibration.c_str(), cal.scope.c_str(),
-                    calibration::to_string(cal.model), hash.c_str());
-        calibration_stage.emplace(cal, board.calibration, hash);
-    }
-
     // Simulation owns time unless asked for real time.
     std::unique_ptr<hal::Clock> clock;
     if (board.sim_realtime) clock = std::make_unique<system::MonotonicClock>();
@@ -240,104 +225,22 @@ int run_sim_command(const Args& args) {
     hal::ControlMerge inputs;
     inputs.attach(&scripted);
 
-    // The analysis path: the status badge, then the tool tracker, as the board says.
-    app::StatusBadge badge;
-    vision::KalmanToolTrackerParams kalman_params;
-    kalman_params.red_binarised = board.tracker == "kalman_red";
-    vision::KalmanToolTracker kalman(kalman_params);
-    vision::ToolLikelihood tool_model;
-    if (board.tracker == "likelihood" && !tool_model.load(board.tool_model, error)) {
-        std::fprintf(stderr, "endotower sim: analysis.tool_model: %s\n", error.c_str());
+    // The analysis path, as the board says (the same builder as `endotower run`).
+    app::StderrLog log;
+    AnalysisChain analysis;
+    // The SCI's overlay is drawn with GLES2 (headless EGL on the host); without one the
+    // SCI still runs and traces.
+    std::unique_ptr<hal::OverlayRenderer> renderer;
+    if (board.sci) {
+        renderer = gles::create_gles_renderer(error);
+        if (!renderer) std::fprintf(stderr, "endotower sim: sci: no overlay renderer: %s\n", error.c_str());
+        error.clear();
+    }
+    if (!analysis.build(board, source.format(), std::move(marks), renderer.get(), log, "sim", error)) {
+        std::fprintf(stderr, "endotower sim: %s\n", error.c_str());
         return kExitBadInput;
     }
-    vision::LikelihoodToolTracker likelihood(tool_model);
-    vision::ToolTracker& tracker = board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(likelihood) : kalman;
-    vision::ToolTrackingStage tracking(tracker);
-    vision::RegionTrackerParams region_params;
-    vision::parse_region_descriptor(board.region_descriptor, region_params.descriptor);  // checked by the board parser
-    region_params.redetect_interval = board.region_redetect_interval;
-    region_params.min_inliers = board.region_min_inliers;
-    region_params.detect_max_width = board.region_detect_max_width;
-    region_params.propagate = board.region_propagate;
-    vision::RegionTracker region_tracker(region_params);
-    vision::RegionStage regions(region_tracker);
-    for (vision::RegionMark& m : marks) regions.schedule(std::move(m));
-    // Gestures (issue 6): a wrong or corrupt model disables them, never the video.
-    vision::GestureClassifier gesture_classifier;
-    vision::ToolLikelihood gesture_tool_model;
-    bool gestures = false;
-    if (board.gestures) {
-        gestures = gesture_classifier.load(board.gesture_model, error);
-        if (gestures && gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
-            !gesture_tool_model.load(board.tool_model, error)) {
-            error = "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
-            gestures = false;
-        }
-        if (!gestures)
-            std::fprintf(stderr, "endotower sim: analysis.gestures.model: %s; gesture recognition disabled\n",
-                         error.c_str());
-    }
-    vision::GestureSegmenterParams gesture_seg;
-    gesture_seg.method = gesture_classifier.segmentation();
-    vision::GestureSegmenter gesture_segmenter(&gesture_tool_model, gesture_seg);
-    vision::GestureStageParams gesture_params;
-    gesture_params.hold.hold_ms = board.gesture_hold_ms;
-    vision::GestureStage gesture_stage(gesture_segmenter, gesture_classifier, gesture_params);
-    app::StageChain chain;
-    if (board.stage == "status_badge") chain.add(&badge);
-    if (board.tracker != "none") chain.add(&tracking);
-    if (calibration_stage) chain.add(&*calibration_stage);
-    // With a calibration of this image size, the tracker's tools get their 3-D pose.
-    calibration::Undistorter undistorter;
-    if (calibration_stage && board.tracker != "none") {
-        const hal::FrameFormat f = source.format();
-        if (cal.width != f.width || cal.height != f.height) {
-            std::printf("calibration: %dx%d, the input is %dx%d: no 3-D tool pose\n", cal.width, cal.height, f.width,
-                        f.height);
-        } else if (!undistorter.init(cal, error)) {
-            std::printf("calibration: %s: no 3-D tool pose\n", error.c_str());
-        } else {
-            // The corrected point whose source is p: a fixed point, the distortion is mild.
-            auto to_corrected = [&undistorter](vision::Point2 p) {
-                vision::Point2 q = p;
-                for (int i = 0; i < 12; ++i) {
-                    const calibration::Point2 s = undistorter.source_of(q.x, q.y);
-                    q.x += p.x - s.x;
-                    q.y += p.y - s.y;
-                }
-                return q;
-            };
-            tracking.set_camera({cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected, board.tool_diameter_mm);
-        }
-    }
-    // Strip markers (issue 6): millimetres with a calibration that has the two-dot table.
-    vision::StripMarkerParams marker_params;
-    marker_params.diameter_mm = board.tool_diameter_mm;
-    vision::StripMarkerTracker marker_tracker(marker_params);
-    vision::StripMarkerStage markers(marker_tracker);
-    if (board.markers) {
-        chain.add(&markers);
-        const hal::FrameFormat f = source.format();
-        if (!calibration_stage || !cal.separation) {
-            std::printf("markers: no calibration with a separation table: positions in pixels only\n");
-        } else if (cal.width != f.width || cal.height != f.height || !undistorter.init(cal, error)) {
-            std::printf("markers: the calibration does not fit the input: positions in pixels only\n");
-        } else {
-            auto to_corrected = [&undistorter](vision::Point2 p) {
-                vision::Point2 q = p;
-                for (int i = 0; i < 12; ++i) {
-                    const calibration::Point2 s = undistorter.source_of(q.x, q.y);
-                    q.x += p.x - s.x;
-                    q.y += p.y - s.y;
-                }
-                return q;
-            };
-            marker_tracker.set_calibration(*cal.separation, {cal.fx, cal.fy, cal.cx, cal.cy}, to_corrected);
-        }
-    }
-    if (gestures) chain.add(&gesture_stage);
-    if (!a.regions.empty() || marks.size() > 0) chain.add(&regions);
-    app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
+    app::AnalysisStage* stage = analysis.stage();
 
     app::PipelineConfig cfg;
     cfg.latency_ns = static_cast<hal::Nanos>(board.latency_ms * 1e6);
@@ -349,7 +252,6 @@ int run_sim_command(const Args& args) {
     // Wake at the due time, not up to 50 us after it (the default timer slack).
     if (board.sim_realtime) system::tighten_timer_slack();
 
-    app::StderrLog log;
     app::Pipeline pipeline(cfg, source, sink, *clock, &inputs, stage,
                            board.sim_trace.empty() ? nullptr : &trace, log);
     g_running = &pipeline;
@@ -359,7 +261,7 @@ int run_sim_command(const Args& args) {
     g_running = nullptr;
 
     if (!source.warning().empty()) std::fprintf(stderr, "endotower sim: warning: %s\n", source.warning().c_str());
-    for (const std::string& e : regions.errors()) std::fprintf(stderr, "endotower sim: cannot mark a region: %s\n", e.c_str());
+    for (const std::string& e : analysis.regions().errors()) std::fprintf(stderr, "endotower sim: cannot mark a region: %s\n", e.c_str());
     const bool trace_ok = board.sim_trace.empty() || trace.close();
     if (!trace_ok) std::fprintf(stderr, "endotower sim: %s\n", trace.error().c_str());
 
@@ -389,7 +291,7 @@ int run_sim_command(const Args& args) {
     }
     if (!trace_ok) return kExitFailure;
     // A region that could not be marked is bad input (a polygon without texture, outside the frame).
-    return regions.errors().empty() ? kExitOk : kExitBadInput;
+    return analysis.regions().errors().empty() ? kExitOk : kExitBadInput;
 }
 
 }  // namespace endotower::firmware

@@ -44,6 +44,8 @@ void GestureStage::process(app::AnalysisContext& ctx) {
     const GestureHold::State s =
         hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},
                      ctx.frame.capture_ns, still_px_);
+    current_ = {s.label, one ? results[which].confidence : 0.0, s.held_ms, s.fired,
+                one ? blobs_[which].tip : Point2{}};
 
     ctx.trace.begin_object("gesture");
     if (s.label >= 0)

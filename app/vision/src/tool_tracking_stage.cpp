@@ -39,6 +39,7 @@ void ToolTrackingStage::configure(const hal::FrameFormat& format) {
 
 void ToolTrackingStage::process(app::AnalysisContext& ctx) {
     const std::size_t n = tracker_.track(ctx.frame, std::span<ToolEstimate, ToolTracker::kMaxTools>(tools_));
+    count_ = n;
     const int thick = std::max(2, ctx.frame.format.height / 270);
     ctx.trace.begin_array("tools");
     for (std::size_t i = 0; i < n; ++i) {
@@ -46,7 +47,8 @@ void ToolTrackingStage::process(app::AnalysisContext& ctx) {
         // The cursor: the surgeon's pointer is the tool tip.
         const app::Rgba colour = t.id % 2 == 0 ? app::Rgba{60, 230, 120, 230} : app::Rgba{80, 170, 255, 230};
         draw_ring(ctx.overlay, t.tip, ring_radius_, thick, colour);
-        ToolPose pose;
+        ToolPose& pose = poses_[i];
+        pose = ToolPose{};
         if (undistort_ && diameter_mm_ > 0 && t.edges.found) {
             const auto u = [&](Point2 p) { return undistort_(p); };
             pose = reconstruct_tool_pose(camera_, {u(t.edges.e1.a), u(t.edges.e1.b)}, {u(t.edges.e2.a), u(t.edges.e2.b)},

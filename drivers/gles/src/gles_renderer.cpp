@@ -607,7 +607,11 @@ std::unique_ptr<hal::OverlayRenderer> create_gles_renderer(std::string& error,
         eglDestroyContext(display, context);
         return nullptr;
     }
-    return std::make_unique<GlesRenderer>(display, context, surface, options);
+    auto renderer = std::make_unique<GlesRenderer>(display, context, surface, options);
+    // Released here: the first call makes it current on the thread that will use it
+    // (the analysis thread); a context current on another thread is EGL_BAD_ACCESS.
+    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    return renderer;
 }
 
 }  // namespace endotower::gles

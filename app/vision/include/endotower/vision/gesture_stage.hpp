@@ -13,7 +13,8 @@
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
 //               "tools": [{"label", "confidence", "tip_px": [x, y]}]}
 // Overlay: a square at each classified tip, filled when the gesture has fired.
-// Borrows the segmenter and the classifier.
+// Borrows the segmenter and the classifier. current(): this frame's gesture for the
+// stages after it in the chain (the SCI).
 #pragma once
 
 #include <array>
@@ -53,6 +54,14 @@ struct GestureStageParams {
     double min_confidence = 0.5;
 };
 
+// One frame's gesture: label -1 = none; tip where the gesture's region is (px).
+struct GestureFrame {
+    int label = -1;
+    double confidence = 0, held_ms = 0;
+    bool fired = false;
+    Point2 tip;
+};
+
 class GestureStage final : public app::AnalysisStage {
 public:
     GestureStage(GestureSegmenter& segmenter, const GestureClassifier& classifier,
@@ -61,8 +70,10 @@ public:
     std::string_view name() const override { return "gestures"; }
     void configure(const hal::FrameFormat& format) override;
     void process(app::AnalysisContext& ctx) override;
+    const GestureFrame& current() const { return current_; }
 
 private:
+    GestureFrame current_;
     GestureSegmenter& segmenter_;
     const GestureClassifier& classifier_;
     GestureStageParams params_;

@@ -1,0 +1,140 @@
+// SciMachine: the surgeon-computer interface's one state machine (docs/sci.md has the
+// diagram). One step() per analysed frame with that frame's tools, gesture and handle
+// events; times are the frames' capture times, so dwell and hold times are exact on
+// the virtual clock (a 2.0 s dwell clicks on the first frame at >= 2.0 s, not before).
+//
+// States: inactive, activating (scissors held still in the activation area at the
+// bottom of the image, fig. 3.31), menu (pointing, nothing highlighted), highlight
+// (the item under the tip or chosen by the wheel; the tip's item clicks after
+// `dwell_ms`), confirm (an item selected with the open grasper waits `confirm_ms` for
+// a loop of the tip: a loop confirms, anything else denies, fig. 3.32/3.33), grabbed
+// (the image box follows the tool, eq. 4.33).
+// Inputs: button press = activate / click the highlighted item / place the box;
+// long press = deactivate; wheel = move the highlight (images in the viewer); a cross
+// held `cross_hold_ms` opens the quadrant menu when inactive and deactivates otherwise.
+// event() names what happened this frame (docs/sci.md lists them), or is empty.
+// Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
+// hold 1000 ms, confirm window 2000 ms, loop 300 deg of turning, activation area the
+// bottom 20 % x middle 40 % of the frame. No allocation after configure().
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+#include "endotower/hal/control_input.hpp"
+#include "endotower/sci/sci_functions.hpp"
+#include "endotower/sci/sci_menu.hpp"
+
+namespace endotower::sci {
+
+enum class SciState : std::uint8_t {
+    kInactive,
+    kActivating,
+    kMenu,
+    kHighlight,
+    kConfirm,
+    kGrabbed
+};
+std::string_view to_string(SciState s);
+
+enum class SciGesture : std::uint8_t { kNone, kOpenGrasper, kScissors, kCross, kOther };
+
+struct SciTool {
+    double x = 0, y = 0;  // tip, px
+    bool has_3d = false;
+    Vec3d tip_mm, axis_dir;
+};
+
+struct SciFrame {
+    hal::Nanos t_ns = 0;
+    std::array<SciTool, 2> tools{};
+    int tool_count = 0;  // tools[0] is the cursor
+    SciGesture gesture = SciGesture::kNone;
+    double gesture_held_ms = 0;  // held still this long (GestureHold)
+    bool gesture_fired = false;  // the frame the hold reached the gesture stage's hold time
+    double gesture_x = 0, gesture_y = 0;  // the gesture's tip, px
+    std::span<const hal::ControlEvent> events;
+};
+
+struct SciParams {
+    SciLayout layout = SciLayout::kThreeLevel;
+    double dwell_ms = 2000, activation_hold_ms = 3000, cross_hold_ms = 1000, confirm_ms = 2000;
+    double loop_deg = 300;
+    double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
+    std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)
+    Vec3d box_target_mm{20, 10, 90};
+    double box_tolerance_mm = 10;
+};
+
+class SciMachine {
+public:
+    explicit SciMachine(SciParams params = {}) : params_(params) {}
+    void configure(int width, int height);
+    void step(const SciFrame& f);
+
+    SciState state() const { return state_; }
+    const SciMenu& menu() const { return menus_[static_cast<std::size_t>(menu_)]; }
+    int highlighted() const { return highlighted_; }           // index in menu(), or -1
+    std::string_view event() const { return event_; }          // "" = none this frame
+    double dwell_fraction() const { return dwell_fraction_; }  // 0..1 of the tip's dwell
+    double activation_fraction() const { return activation_fraction_; }
+    bool active() const { return state_ != SciState::kInactive && state_ != SciState::kActivating; }
+    float activation_x0() const { return area_x0_; }
+    float activation_y0() const { return area_y0_; }
+    float activation_x1() const { return area_x1_; }
+    SciModality modality() const { return modality_; }
+    int image_index() const { return image_; }
+    const ImageBox& box() const { return box_; }
+    const SutureThread& suture() const { return suture_; }
+    bool suture_started() const { return suture_started_; }
+    int box_face() const { return box_face_; }  // the face under the tip, or -1
+    void set_camera(const hal::SceneCamera& c) { camera_ = c; }
+
+private:
+    void go(SciState s) { state_ = s; }
+    void open(MenuId m);
+    void deactivate(std::string_view why);
+    void click(int item);
+    void execute(const SciItem& item);
+    void point(const SciFrame& f);
+    void functions(const SciFrame& f);
+    void track_loop(const SciFrame& f);
+
+    SciParams params_;
+    SciMenuTable menus_{};
+    int width_ = 0, height_ = 0;
+    float area_x0_ = 0, area_x1_ = 0, area_y0_ = 0;
+    hal::SceneCamera camera_;
+
+    SciState state_ = SciState::kInactive;
+    MenuId menu_ = MenuId::kMain;
+    std::array<MenuId, 4> parents_{};  // the menus to Return to
+    int depth_ = 0;
+    int highlighted_ = -1, hover_ = -1;
+    hal::Nanos dwell_start_ = 0, last_t_ = 0;
+    bool have_last_t_ = false;
+    std::string_view event_;
+    double dwell_fraction_ = 0, activation_fraction_ = 0;
+    bool cross_armed_ = true;
+    bool rearm_ = false;            // after a click the tip must leave the items first
+    bool wheel_highlight_ = false;  // the highlight came from the wheel, not the tip
+    hal::Nanos activation_start_ = 0;
+    double last_held_ms_ = 0;
+    // confirm: the window and the tip's turning since it opened
+    hal::Nanos confirm_start_ = 0;
+    int confirm_item_ = -1;
+    double loop_x_ = 0, loop_y_ = 0, loop_heading_ = 0, loop_turn_ = 0;
+    bool loop_have_heading_ = false;
+    // functions
+    SciModality modality_ = SciModality::kCt;
+    int image_ = 0;
+    ImageBox box_;
+    int box_face_ = -1, box_face_dwelt_ = -1;
+    hal::Nanos box_dwell_start_ = 0;
+    SutureThread suture_;
+    bool suture_started_ = false;
+};
+
+}  // namespace endotower::sci

@@ -1,0 +1,323 @@
+#include "endotower/sci/sci_machine.hpp"
+
+#include <cmath>
+
+namespace endotower::sci {
+
+namespace {
+
+hal::Nanos ms_to_ns(double ms) {
+    return static_cast<hal::Nanos>(std::llround(ms * 1e6));
+}
+
+double wrap_deg(double a) {
+    while (a > 180) a -= 360;
+    while (a <= -180) a += 360;
+    return a;
+}
+
+}  // namespace
+
+std::string_view to_string(SciState s) {
+    switch (s) {
+        case SciState::kInactive:
+            return "inactive";
+        case SciState::kActivating:
+            return "activating";
+        case SciState::kMenu:
+            return "menu";
+        case SciState::kHighlight:
+            return "highlight";
+        case SciState::kConfirm:
+            return "confirm";
+        case SciState::kGrabbed:
+            return "grabbed";
+    }
+    return "?";
+}
+
+void SciMachine::configure(int width, int height) {
+    width_ = width, height_ = height;
+    menus_ = build_menus(params_.layout, width, height);
+    // Fig. 3.31: a band at the bottom of the image, in the middle.
+    area_x0_ = static_cast<float>(width * (0.5 - params_.activation_width / 2));
+    area_x1_ = static_cast<float>(width * (0.5 + params_.activation_width / 2));
+    area_y0_ = static_cast<float>(height * (1.0 - params_.activation_height));
+}
+
+void SciMachine::open(MenuId m) {
+    menu_ = m;
+    highlighted_ = hover_ = -1;
+    rearm_ = true;
+    wheel_highlight_ = false;
+    go(SciState::kMenu);
+}
+
+void SciMachine::deactivate(std::string_view why) {
+    event_ = why;
+    depth_ = 0;
+    menu_ = MenuId::kMain;
+    highlighted_ = hover_ = -1;
+    box_.release();
+    go(SciState::kInactive);
+}
+
+void SciMachine::click(int item) {
+    event_ = "click";
+    execute(menu().items[static_cast<std::size_t>(item)]);
+}
+
+void SciMachine::execute(const SciItem& item) {
+    auto push = [this](MenuId m) {
+        if (depth_ < static_cast<int>(parents_.size())) parents_[depth_++] = menu_;
+        open(m);
+    };
+    const int n = params_.image_counts[static_cast<std::size_t>(modality_)];
+    switch (item.action) {
+        case SciAction::kSubmenu:
+            push(item.target);
+            break;
+        case SciAction::kReturn:
+            open(depth_ > 0 ? parents_[--depth_] : MenuId::kMain);
+            break;
+        case SciAction::kMain:
+            depth_ = 0, open(MenuId::kMain);
+            break;
+        case SciAction::kExit:
+            deactivate("exit");
+            break;
+        case SciAction::kView:
+            modality_ = item.modality;
+            image_ = 0;
+            push(MenuId::kViewer);
+            break;
+        case SciAction::kPrevious:
+            if (n > 0) image_ = (image_ + n - 1) % n;
+            rearm_ = true;  // a second previous needs the tip to come back
+            break;
+        case SciAction::kNext:
+            if (n > 0) image_ = (image_ + 1) % n;
+            rearm_ = true;
+            break;
+        case SciAction::kPatientRecord:
+            push(MenuId::kRecord);
+            break;
+        case SciAction::kImageBox:
+            box_.reset();
+            box_face_ = box_face_dwelt_ = -1;
+            push(MenuId::kBox);
+            break;
+        case SciAction::kSuture:
+            suture_started_ = false;
+            push(MenuId::kSuture);
+            break;
+    }
+}
+
+void SciMachine::point(const SciFrame& f) {
+    const int hover = f.tool_count > 0 ? menu().hit(static_cast<float>(f.tools[0].x),
+                                                    static_cast<float>(f.tools[0].y))
+                                       : -1;
+    if (rearm_) {
+        if (hover >= 0) {
+            hover_ = -1;
+        } else {
+            rearm_ = false;
+        }
+    }
+    if (!rearm_ && hover != hover_) {
+        hover_ = hover;
+        if (hover >= 0) {
+            highlighted_ = hover;
+            wheel_highlight_ = false;
+            dwell_start_ = f.t_ns;
+            event_ = "highlight";
+        } else if (!wheel_highlight_ && highlighted_ >= 0) {
+            highlighted_ = -1;
+            event_ = "unhighlight";
+        }
+    }
+    if (!rearm_ && hover_ >= 0 && highlighted_ == hover_) {
+        const hal::Nanos dwell = ms_to_ns(params_.dwell_ms), held = f.t_ns - dwell_start_;
+        dwell_fraction_ =
+            dwell > 0 ? std::min(1.0, static_cast<double>(held) / static_cast<double>(dwell)) : 1.0;
+        if (held >= dwell) {
+            dwell_fraction_ = 0;
+            click(hover_);
+            return;
+        }
+    }
+    // Open grasper held (the gesture fired): select, then wait for the loop (fig. 3.32).
+    if (highlighted_ >= 0 && f.gesture == SciGesture::kOpenGrasper && f.gesture_fired) {
+        confirm_item_ = highlighted_;
+        confirm_start_ = f.t_ns;
+        loop_turn_ = 0;
+        loop_have_heading_ = false;
+        loop_x_ = f.tool_count > 0 ? f.tools[0].x : 0;
+        loop_y_ = f.tool_count > 0 ? f.tools[0].y : 0;
+        event_ = "select";
+        go(SciState::kConfirm);
+        return;
+    }
+    go(highlighted_ >= 0 ? SciState::kHighlight : SciState::kMenu);
+}
+
+void SciMachine::track_loop(const SciFrame& f) {
+    if (f.tool_count == 0) return;
+    const double dx = f.tools[0].x - loop_x_, dy = f.tools[0].y - loop_y_;
+    // Steps shorter than 2 % of the height are jitter, not motion.
+    if (std::hypot(dx, dy) < 0.02 * height_) return;
+    const double heading = std::atan2(dy, dx) * 180.0 / 3.14159265358979323846;
+    if (loop_have_heading_) loop_turn_ += wrap_deg(heading - loop_heading_);
+    loop_heading_ = heading;
+    loop_have_heading_ = true;
+    loop_x_ = f.tools[0].x, loop_y_ = f.tools[0].y;
+}
+
+void SciMachine::functions(const SciFrame& f) {
+    const double dt = have_last_t_ ? static_cast<double>(f.t_ns - last_t_) / 1e9 : 0.0;
+    if (menu_ == MenuId::kSuture && f.tool_count >= 2) {
+        // Millimetres with two 3-D tips, else pixels (drawn flat on the image).
+        const bool mm = f.tools[0].has_3d && f.tools[1].has_3d && camera_.valid();
+        const Vec3d a = mm ? f.tools[0].tip_mm : Vec3d{f.tools[0].x, f.tools[0].y, 0};
+        const Vec3d b = mm ? f.tools[1].tip_mm : Vec3d{f.tools[1].x, f.tools[1].y, 0};
+        if (!suture_started_)
+            suture_.reset(a, b);
+        else
+            suture_.step(a, b, dt);
+        suture_started_ = true;
+    }
+    if (menu_ != MenuId::kBox) return;
+    if (state_ == SciState::kGrabbed) {
+        if (f.tool_count > 0 && f.tools[0].has_3d)
+            box_.follow(f.tools[0].tip_mm, f.tools[0].axis_dir);
+        return;
+    }
+    // A face is grabbed by a dwell on it, like a button (fig. 4.36a); it needs the 3-D tip.
+    box_face_ =
+        hover_ < 0 && f.tool_count > 0 ? box_.face_under(f.tools[0].x, f.tools[0].y, camera_) : -1;
+    if (box_face_ != box_face_dwelt_) {
+        box_face_dwelt_ = box_face_;
+        box_dwell_start_ = f.t_ns;
+    }
+    if (box_face_ >= 0 && f.tools[0].has_3d) {
+        const hal::Nanos held = f.t_ns - box_dwell_start_, dwell = ms_to_ns(params_.dwell_ms);
+        dwell_fraction_ = std::min(1.0, static_cast<double>(held) / static_cast<double>(dwell));
+        if (held >= dwell) {
+            box_.grab(f.tools[0].tip_mm, f.tools[0].axis_dir);
+            box_face_dwelt_ = -1;
+            event_ = "grab";
+            go(SciState::kGrabbed);
+        }
+    }
+}
+
+void SciMachine::step(const SciFrame& f) {
+    event_ = {};
+    dwell_fraction_ = activation_fraction_ = 0;
+    if (f.gesture != SciGesture::kCross) cross_armed_ = true;
+
+    for (const hal::ControlEvent& e : f.events) {
+        if (e.kind == hal::ControlEvent::Kind::kButtonPress && e.button == 0) {
+            if (!active()) {
+                depth_ = 0;
+                open(MenuId::kMain);
+                event_ = "activate_button";
+            } else if (state_ == SciState::kGrabbed) {
+                event_ = box_.place(params_.box_target_mm, params_.box_tolerance_mm) ? "place"
+                                                                                     : "release";
+                go(SciState::kMenu);
+            } else if (state_ != SciState::kConfirm && highlighted_ >= 0) {
+                click(highlighted_);
+            }
+        } else if (e.kind == hal::ControlEvent::Kind::kLongPress && active()) {
+            deactivate("deactivate");
+        } else if (e.kind == hal::ControlEvent::Kind::kWheel && e.delta != 0 &&
+                   (state_ == SciState::kMenu || state_ == SciState::kHighlight)) {
+            const int n = menu_ == MenuId::kViewer
+                              ? params_.image_counts[static_cast<std::size_t>(modality_)]
+                              : static_cast<int>(menu().count);
+            if (n == 0) continue;
+            if (menu_ == MenuId::kViewer) {
+                image_ = ((image_ + e.delta) % n + n) % n;
+                event_ = "image";
+            } else {
+                highlighted_ = highlighted_ < 0 ? (e.delta > 0 ? e.delta - 1 : n + e.delta)
+                                                : highlighted_ + e.delta;
+                highlighted_ = (highlighted_ % n + n) % n;
+                wheel_highlight_ = true;
+                event_ = "wheel";
+                go(SciState::kHighlight);
+            }
+        }
+    }
+
+    // A cross held still (fig. 3.34a): the quadrant menu when inactive, else off.
+    if (f.gesture == SciGesture::kCross && cross_armed_ &&
+        f.gesture_held_ms >= params_.cross_hold_ms) {
+        cross_armed_ = false;
+        if (active()) {
+            deactivate("deactivate");
+        } else {
+            depth_ = 0;
+            open(MenuId::kQuadrant);
+            event_ = "quadrant";
+        }
+    }
+
+    switch (state_) {
+        case SciState::kInactive:
+        case SciState::kActivating: {
+            const bool in_area = f.gesture == SciGesture::kScissors && f.gesture_x >= area_x0_ &&
+                                 f.gesture_x < area_x1_ && f.gesture_y >= area_y0_;
+            if (!in_area) {
+                if (state_ == SciState::kActivating) event_ = "activation_cancel";
+                go(SciState::kInactive);
+                break;
+            }
+            // Moving restarts the gesture's hold; so does it restart the activation.
+            if (state_ == SciState::kInactive || f.gesture_held_ms < last_held_ms_) {
+                activation_start_ = f.t_ns;
+                if (state_ == SciState::kInactive) event_ = "activation_start";
+                go(SciState::kActivating);
+            }
+            const hal::Nanos held = f.t_ns - activation_start_,
+                             need = ms_to_ns(params_.activation_hold_ms);
+            activation_fraction_ =
+                std::min(1.0, static_cast<double>(held) / static_cast<double>(need));
+            if (held >= need) {
+                depth_ = 0;
+                open(MenuId::kMain);
+                event_ = "activate_hold";
+            }
+            break;
+        }
+        case SciState::kMenu:
+        case SciState::kHighlight:
+            point(f);
+            break;
+        case SciState::kConfirm:
+            track_loop(f);
+            if (std::abs(loop_turn_) >= params_.loop_deg) {
+                const int item = confirm_item_;
+                go(SciState::kMenu);
+                execute(menu().items[static_cast<std::size_t>(item)]);
+                if (event_ != "exit") event_ = "confirm";
+            } else if (f.t_ns - confirm_start_ >= ms_to_ns(params_.confirm_ms)) {
+                // Denied: the tip must leave the item before it can be chosen again.
+                event_ = "deny";
+                highlighted_ = hover_ = -1;
+                rearm_ = true;
+                go(SciState::kMenu);
+            }
+            break;
+        case SciState::kGrabbed:
+            break;
+    }
+    if (active()) functions(f);
+    last_held_ms_ = f.gesture_held_ms;
+    last_t_ = f.t_ns;
+    have_last_t_ = true;
+}
+
+}  // namespace endotower::sci

@@ -1,0 +1,362 @@
+// SciMachine on synthetic tool tips, gestures and handle events at exact virtual
+// times (25 fps frames, 40 ms apart): activation, dwell clicks at 2.0 s and not 1.9 s,
+// confirm/deny, the quadrant menu, menu navigation, wheel, exit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "endotower/sci/sci_machine.hpp"
+#include "endotower/sci/sci_scene.hpp"
+
+namespace endotower::sci {
+namespace {
+
+constexpr hal::Nanos kMs = 1'000'000;
+constexpr int kW = 640, kH = 480;
+
+struct Driver {
+    SciMachine m;
+    hal::Nanos t = 0;
+    explicit Driver(SciParams p = {}) : m(p) { m.configure(kW, kH); }
+
+    // One frame at time `at` with the cursor at (x, y) (x < 0: no tool).
+    void frame(hal::Nanos at, double x, double y, SciGesture g = SciGesture::kNone,
+               double held_ms = 0, bool fired = false, std::vector<hal::ControlEvent> events = {}) {
+        SciFrame f;
+        t = at;
+        f.t_ns = at;
+        if (x >= 0) {
+            f.tools[0].x = x, f.tools[0].y = y;
+            f.tool_count = 1;
+        }
+        f.gesture = g, f.gesture_held_ms = held_ms, f.gesture_fired = fired;
+        f.gesture_x = x, f.gesture_y = y;
+        for (auto& e : events) e.time_ns = at;
+        f.events = events;
+        m.step(f);
+    }
+    void press(hal::Nanos at, double x, double y) {
+        frame(at, x, y, SciGesture::kNone, 0, false,
+              {{hal::ControlEvent::Kind::kButtonPress, 0, 0, 0}});
+    }
+    void wheel(hal::Nanos at, int delta) {
+        frame(at, kW / 2.0, kH / 2.0, SciGesture::kNone, 0, false,
+              {{hal::ControlEvent::Kind::kWheel, 0, static_cast<std::int16_t>(delta), 0}});
+    }
+    std::string menu() const { return std::string(to_string(m.menu().id)); }
+    std::string lit() const {
+        return m.highlighted() < 0 ? "" : std::string(m.menu().items[m.highlighted()].label);
+    }
+    std::string event() const { return std::string(m.event()); }
+    // The centre of item `label` of the current menu.
+    std::pair<double, double> at(const std::string& label) const {
+        for (std::size_t k = 0; k < m.menu().count; ++k) {
+            const SciItem& i = m.menu().items[k];
+            if (i.label != label) continue;
+            if (!i.sector) return {i.x + i.width / 2, i.y + i.height / 2};
+            const double a = (i.start_deg + i.end_deg) / 2 * M_PI / 180,
+                         r = (i.r_inner + std::min(i.r_outer, i.r_inner + 60)) / 2;
+            return {i.cx + r * std::cos(a), i.cy + r * std::sin(a)};
+        }
+        ADD_FAILURE() << "no item " << label << " in " << menu();
+        return {0, 0};
+    }
+    // Rests the tip on `label` from `from` until the click; returns the click time.
+    hal::Nanos dwell(const std::string& label, hal::Nanos from) {
+        const auto [x, y] = at(label);
+        const std::string before = menu();
+        for (hal::Nanos k = from;; k += 40 * kMs) {
+            frame(k, x, y);
+            if (event() == "click" || event() == "exit") return k - from;
+            if (k - from > 5000 * kMs) return -1;
+        }
+    }
+};
+
+TEST(SciMachine, StartsInactiveAndButtonActivates) {
+    Driver d;
+    d.frame(0, 320, 240);
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+    EXPECT_EQ(d.event(), "");
+    d.press(40 * kMs, 320, 240);
+    EXPECT_EQ(d.m.state(), SciState::kMenu);
+    EXPECT_EQ(d.menu(), "main");
+    EXPECT_EQ(d.event(), "activate_button");
+}
+
+TEST(SciMachine, DwellClicksAtTwoSecondsNotOnePointNine) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("Patient record");
+    d.frame(1000 * kMs, x, y);
+    EXPECT_EQ(d.event(), "highlight");
+    EXPECT_EQ(d.m.state(), SciState::kHighlight);
+    EXPECT_EQ(d.lit(), "Patient record");
+    d.frame(2900 * kMs, x, y);  // 1.9 s on the item
+    EXPECT_EQ(d.event(), "");
+    EXPECT_EQ(d.m.state(), SciState::kHighlight);
+    EXPECT_NEAR(d.m.dwell_fraction(), 0.95, 1e-12);
+    EXPECT_EQ(d.menu(), "main");
+    d.frame(2999 * kMs, x, y);  // 1.999 s
+    EXPECT_EQ(d.menu(), "main");
+    d.frame(3000 * kMs, x, y);  // 2.0 s
+    EXPECT_EQ(d.event(), "click");
+    EXPECT_EQ(d.menu(), "patient_record");
+    EXPECT_EQ(d.m.state(), SciState::kMenu);
+}
+
+TEST(SciMachine, DwellIsConfigurableAndRestartsOnAnotherItem) {
+    SciParams p;
+    p.dwell_ms = 1000;
+    Driver d(p);
+    d.press(0, 320, 240);
+    const auto a = d.at("Patient record"), b = d.at("3-D effects");
+    d.frame(40 * kMs, a.first, a.second);
+    d.frame(800 * kMs, b.first, b.second);  // moved on: a new dwell
+    EXPECT_EQ(d.event(), "highlight");
+    d.frame(1040 * kMs, b.first, b.second);
+    EXPECT_EQ(d.menu(), "main");
+    d.frame(1800 * kMs, b.first, b.second);
+    EXPECT_EQ(d.event(), "click");
+    EXPECT_EQ(d.menu(), "3d_effects");
+}
+
+TEST(SciMachine, AfterAClickTheTipMustLeaveBeforeTheNextDwell) {
+    Driver d;
+    d.press(0, 320, 240);
+    // "Preoperative images" and the submenu's "CT" are in the same place.
+    ASSERT_EQ(d.dwell("Preoperative images", 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.menu(), "preoperative_images");
+    const auto [x, y] = d.at("CT");
+    const hal::Nanos t0 = d.t;
+    for (hal::Nanos t = t0 + 40 * kMs; t < t0 + 4000 * kMs; t += 40 * kMs) d.frame(t, x, y);
+    EXPECT_EQ(d.menu(), "preoperative_images");
+    EXPECT_EQ(d.lit(), "");
+    d.frame(d.t + 40 * kMs, 320, 240);  // off the items
+    EXPECT_EQ(d.dwell("CT", d.t + 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.menu(), "viewer");
+    EXPECT_EQ(d.m.modality(), SciModality::kCt);
+}
+
+TEST(SciMachine, ScissorsHeldThreeSecondsInTheAreaActivates) {
+    Driver d;
+    // Outside the area (top of the image): never.
+    for (int k = 0; k <= 100; ++k) d.frame(k * 40 * kMs, 320, 100, SciGesture::kScissors, k * 40.0);
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+    // Another gesture inside the area: never.
+    for (int k = 0; k <= 100; ++k)
+        d.frame((200 + k) * 40 * kMs, 320, 450, SciGesture::kOpenGrasper, k * 40.0);
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+    const hal::Nanos t0 = 400 * 40 * kMs;
+    d.frame(t0, 320, 450, SciGesture::kScissors, 0);
+    EXPECT_EQ(d.event(), "activation_start");
+    EXPECT_EQ(d.m.state(), SciState::kActivating);
+    for (int k = 1; k < 75; ++k)
+        d.frame(t0 + k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
+    EXPECT_EQ(d.m.state(), SciState::kActivating);  // 2.96 s
+    d.frame(t0 + 3000 * kMs, 320, 450, SciGesture::kScissors, 3000.0);
+    EXPECT_EQ(d.event(), "activate_hold");
+    EXPECT_EQ(d.menu(), "main");
+}
+
+TEST(SciMachine, MovingTheScissorsRestartsTheActivation) {
+    Driver d;
+    for (int k = 0; k < 50; ++k) d.frame(k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
+    // The gesture stage restarted its hold (the tip moved): so does the SCI.
+    for (int k = 0; k < 75; ++k)
+        d.frame((50 + k) * 40 * kMs, 330, 450, SciGesture::kScissors, k * 40.0);
+    EXPECT_EQ(d.m.state(), SciState::kActivating);
+    d.frame(125 * 40 * kMs, 330, 450, SciGesture::kScissors, 3000.0);
+    EXPECT_EQ(d.event(), "activate_hold");
+    // Leaving the area cancels.
+    Driver e;
+    e.frame(0, 320, 450, SciGesture::kScissors, 0);
+    e.frame(40 * kMs, 320, 300, SciGesture::kScissors, 40);
+    EXPECT_EQ(e.event(), "activation_cancel");
+    EXPECT_EQ(e.m.state(), SciState::kInactive);
+}
+
+// Open grasper on a highlighted item selects; a loop of the tip within 2 s confirms.
+TEST(SciMachine, OpenGrasperSelectsAndALoopConfirms) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    EXPECT_EQ(d.event(), "select");
+    EXPECT_EQ(d.m.state(), SciState::kConfirm);
+    // A circle of radius 40 px in 1.2 s (30 frames, 12 degrees each).
+    hal::Nanos t = 1000 * kMs;
+    std::string confirmed;
+    for (int k = 1; k <= 30 && confirmed.empty(); ++k) {
+        t += 40 * kMs;
+        const double a = k * 12.0 * M_PI / 180;
+        d.frame(t, x + 40 * std::sin(a), y - 40 * (1 - std::cos(a)));
+        if (d.event() == "confirm") confirmed = d.menu();
+    }
+    EXPECT_EQ(confirmed, "3d_effects");
+    EXPECT_LT(t, 3000 * kMs);
+}
+
+TEST(SciMachine, AnyOtherMotionDeniesAfterTwoSeconds) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    // A straight stroke to the right and back: no loop.
+    for (int k = 1; k < 50; ++k)
+        d.frame(1000 * kMs + k * 40 * kMs, x + 4.0 * (k < 25 ? k : 50 - k), y);
+    EXPECT_EQ(d.m.state(), SciState::kConfirm);  // 1.96 s
+    d.frame(3000 * kMs, x, y);
+    EXPECT_EQ(d.event(), "deny");
+    EXPECT_EQ(d.menu(), "main");
+    EXPECT_EQ(d.m.state(), SciState::kMenu);
+}
+
+TEST(SciMachine, CrossHeldOneSecondOpensTheQuadrantMenuAndAgainDeactivates) {
+    Driver d;
+    d.frame(0, 320, 240, SciGesture::kCross, 0);
+    d.frame(960 * kMs, 320, 240, SciGesture::kCross, 960);
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+    d.frame(1000 * kMs, 320, 240, SciGesture::kCross, 1000);
+    EXPECT_EQ(d.event(), "quadrant");
+    EXPECT_EQ(d.menu(), "quadrant");
+    // Still held: nothing more until the cross is released and formed again.
+    d.frame(3000 * kMs, 320, 240, SciGesture::kCross, 3000);
+    EXPECT_EQ(d.menu(), "quadrant");
+    const auto [x, y] = d.at("Open MRI");
+    d.frame(3040 * kMs, 320, 240);
+    EXPECT_EQ(d.dwell("Open MRI", 3080 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.menu(), "viewer");
+    EXPECT_EQ(d.m.modality(), SciModality::kMri);
+    d.frame(d.t + 40 * kMs, x, y, SciGesture::kCross, 0);
+    d.frame(d.t + 1000 * kMs, x, y, SciGesture::kCross, 1000);
+    EXPECT_EQ(d.event(), "deactivate");
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+}
+
+TEST(SciMachine, ThreeLevelNavigationReturnAndExit) {
+    Driver d;
+    d.press(0, 320, 240);
+    hal::Nanos t = 40 * kMs;
+    auto go = [&](const std::string& label, const std::string& expect) {
+        d.frame(t, 320, 240);  // off the items first
+        ASSERT_EQ(d.dwell(label, t + 40 * kMs), 2000 * kMs) << label;
+        EXPECT_EQ(d.menu(), expect) << label;
+        t = d.t + 40 * kMs;
+    };
+    go("3-D effects", "3d_effects");
+    go("Suture manipulation", "suture");
+    go("Return", "3d_effects");
+    go("Return", "main");
+    go("Preoperative images", "preoperative_images");
+    go("X-ray", "viewer");
+    EXPECT_EQ(d.m.modality(), SciModality::kXray);
+    go("Return", "preoperative_images");
+    go("Return", "main");
+    d.frame(t, 320, 240);
+    ASSERT_EQ(d.dwell("Exit", t + 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.event(), "exit");
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+}
+
+TEST(SciMachine, WheelMovesTheHighlightAndThroughImages) {
+    SciParams p;
+    p.image_counts = {3, 2, 1};
+    Driver d(p);
+    d.press(0, 320, 240);
+    d.wheel(40 * kMs, +1);
+    EXPECT_EQ(d.event(), "wheel");
+    EXPECT_EQ(d.lit(), "Preoperative images");
+    d.wheel(80 * kMs, +1);
+    EXPECT_EQ(d.lit(), "Patient record");
+    d.wheel(120 * kMs, -2);
+    EXPECT_EQ(d.lit(), "Exit");  // wraps
+    d.wheel(160 * kMs, +1);
+    EXPECT_EQ(d.lit(), "Preoperative images");
+    // The wheel's highlight does not dwell-click; the button clicks it.
+    for (int k = 5; k < 100; ++k) d.frame(k * 40 * kMs, 320, 240);
+    EXPECT_EQ(d.menu(), "main");
+    d.press(4000 * kMs, 320, 240);
+    EXPECT_EQ(d.event(), "click");
+    EXPECT_EQ(d.menu(), "preoperative_images");
+    d.wheel(4040 * kMs, +1);
+    d.press(4080 * kMs, 320, 240);
+    EXPECT_EQ(d.menu(), "viewer");
+    EXPECT_EQ(d.m.image_index(), 0);
+    d.wheel(4120 * kMs, +1);
+    EXPECT_EQ(d.event(), "image");
+    EXPECT_EQ(d.m.image_index(), 1);
+    d.wheel(4160 * kMs, +4);
+    EXPECT_EQ(d.m.image_index(), 2);  // (1 + 4) mod 3
+    d.wheel(4200 * kMs, -3);
+    EXPECT_EQ(d.m.image_index(), 2);
+}
+
+TEST(SciMachine, LongPressDeactivates) {
+    Driver d;
+    d.press(0, 320, 240);
+    d.frame(800 * kMs, 320, 240, SciGesture::kNone, 0, false,
+            {{hal::ControlEvent::Kind::kLongPress, 0, 0, 0}});
+    EXPECT_EQ(d.event(), "deactivate");
+    EXPECT_EQ(d.m.state(), SciState::kInactive);
+}
+
+TEST(SciMachine, RingLayoutPreviousNextMainMenu) {
+    SciParams p;
+    p.layout = SciLayout::kRing;
+    p.image_counts = {3, 0, 0};
+    Driver d(p);
+    d.press(0, 320, 240);
+    ASSERT_EQ(d.m.menu().count, 4u);
+    EXPECT_EQ(d.m.menu().hit(320, 240 - 0.35f * kH), 0);  // top of the ring: CT
+    EXPECT_EQ(d.m.menu().hit(320 - 0.35f * kH, 240), 3);  // left: EXIT
+    EXPECT_EQ(d.m.menu().hit(320, 240), -1);              // the view stays free
+    EXPECT_EQ(d.dwell("CT", 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.menu(), "viewer");
+    d.frame(d.t + 40 * kMs, 320, 240);
+    EXPECT_EQ(d.dwell("Next", d.t + 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.m.image_index(), 1);
+    d.frame(d.t + 40 * kMs, 320, 240);
+    EXPECT_EQ(d.dwell("Previous", d.t + 40 * kMs), 2000 * kMs);
+    d.frame(d.t + 40 * kMs, 320, 240);
+    EXPECT_EQ(d.dwell("Previous", d.t + 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.m.image_index(), 2);
+    d.frame(d.t + 40 * kMs, 320, 240);
+    EXPECT_EQ(d.dwell("Main menu", d.t + 40 * kMs), 2000 * kMs);
+    EXPECT_EQ(d.menu(), "main");
+}
+
+TEST(SciScene, ThreeLevelMainMenuItemsAtTheirPlaces) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("Patient record");
+    d.frame(40 * kMs, x, y);
+    d.frame(1040 * kMs, x, y);
+    hal::OverlayScene s;
+    SciSceneInput in;
+    in.width = kW, in.height = kH, in.has_tip = true, in.tip_x = static_cast<float>(x),
+    in.tip_y = static_cast<float>(y);
+    build_sci_scene(d.m, SciParams{}, in, s);
+    ASSERT_EQ(s.quads.count, 4u);
+    ASSERT_EQ(s.texts.count, 4u);
+    EXPECT_FLOAT_EQ(s.quads.items[1].x, 0.03f * kW);
+    EXPECT_FLOAT_EQ(s.quads.items[1].y, 0.10f * kH + 0.12f * kH);
+    EXPECT_FLOAT_EQ(s.quads.items[1].width, 0.26f * kW);
+    EXPECT_EQ(s.quads.items[1].fill, (hal::Rgba8{250, 190, 40, 190}));  // highlighted
+    EXPECT_EQ(s.quads.items[0].fill, (hal::Rgba8{30, 60, 110, 130}));
+    EXPECT_STREQ(s.texts.items[1].utf8.data(), "Patient record");
+    ASSERT_EQ(s.discs.count, 1u);  // the dwell arc, half way
+    EXPECT_FLOAT_EQ(s.discs.items[0].sweep_deg, 180.0f);
+    EXPECT_FLOAT_EQ(s.discs.items[0].cx, static_cast<float>(x));
+    // Inactive: nothing at all.
+    Driver off;
+    off.frame(0, 320, 240);
+    build_sci_scene(off.m, SciParams{}, in, s);
+    EXPECT_TRUE(s.empty());
+}
+
+}  // namespace
+}  // namespace endotower::sci

@@ -1,0 +1,130 @@
+// The SCI end to end: `endotower scene` renders tests/unit/sci/data/sci_ring_dwell.yaml
+// (a grasper pointing at the ring menu), `endotower sim` replays it with the handle
+// timeline next to it and the likelihood tracker; the trace's "sci" members must give
+// exactly the expected sequence: button activation, the tip's highlight of CT and its
+// click 2.0 s (50 frames) later, not at 1.9 s; the wheel in the viewer; the sub-ring's
+// Main menu by dwell; the wheel to EXIT and the button's click: inactive.
+// Also: bad sci: board keys are refused with FILE:LINE.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "endotower_command.hpp"
+
+namespace endotower::sci {
+namespace {
+
+namespace fs = std::filesystem;
+using endotower::test::run_endotower;
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path d =
+        fs::temp_directory_path() / ("endotower_sci_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+struct Step {
+    int frame;
+    std::string state, menu, highlighted, event;
+    bool operator==(const Step&) const = default;
+};
+std::ostream& operator<<(std::ostream& o, const Step& s) {
+    return o << "{" << s.frame << " " << s.state << " " << s.menu << " " << s.highlighted << " "
+             << s.event << "}";
+}
+std::string text(const nlohmann::json& v) {
+    return v.is_null() ? "-" : v.get<std::string>();
+}
+
+TEST(SciScenario, RingMenuExactSequence) {
+    const fs::path dir = temp_dir("ring");
+    const std::string src = ENDOTOWER_SOURCE_DIR;
+    auto scene =
+        run_endotower("scene --scenario " + src +
+                      "/tests/unit/sci/data/sci_ring_dwell.yaml --out " + (dir / "scene").string());
+    ASSERT_EQ(scene.status, 0) << scene.output;
+    std::ofstream(dir / "board.yaml")
+        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n"
+           "  tool_model: "
+        << src
+        << "/board/sim/models/tool_likelihood.bin\n"
+           "sci:\n  layout: ring\n  media: "
+        << src << "/board/sim/sci_media\n";
+    auto sim =
+        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
+                      (dir / "scene/frames").string() + " --events " + src +
+                      "/tests/unit/sci/data/sci_ring_dwell_events.txt --out " +
+                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
+    ASSERT_EQ(sim.status, 0) << sim.output;
+
+    std::vector<Step> events, every;
+    std::ifstream in(dir / "trace.jsonl");
+    for (std::string line; std::getline(in, line);) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        ASSERT_TRUE(j.contains("sci")) << line;
+        const nlohmann::json& s = j["sci"];
+        for (const char* k : {"state", "menu", "highlighted", "event"})
+            ASSERT_TRUE(s.contains(k)) << k;
+        const Step st{j["frame"].get<int>(), text(s["state"]), text(s["menu"]),
+                      text(s["highlighted"]), text(s["event"])};
+        every.push_back(st);
+        if (st.event != "-") events.push_back(st);
+    }
+    ASSERT_EQ(every.size(), 175u);
+    ASSERT_EQ(events.size(), 8u) << ::testing::PrintToString(events);
+    // The tip reaches the ring while moving (frames 10-19) and the sub-ring (90-94).
+    const int h1 = events[1].frame, h2 = events[4].frame;
+    EXPECT_GE(h1, 10);
+    EXPECT_LT(h1, 20);
+    EXPECT_GE(h2, 90);
+    EXPECT_LT(h2, 95);
+    const std::vector<Step> expected = {
+        {5, "menu", "main", "-", "activate_button"},
+        {h1, "highlight", "main", "CT", "highlight"},
+        {h1 + 50, "menu", "viewer", "-", "click"},  // 2.0 s at 25 fps
+        {85, "menu", "viewer", "-", "image"},
+        {h2, "highlight", "viewer", "Main menu", "highlight"},
+        {h2 + 50, "menu", "main", "-", "click"},
+        {160, "highlight", "main", "EXIT", "wheel"},
+        {165, "inactive", "-", "-", "exit"},
+    };
+    EXPECT_EQ(events, expected);
+    // 1.9 s (and 1.96 s) after the highlight: still highlighted, no click.
+    EXPECT_EQ(every[h1 + 47], (Step{h1 + 47, "highlight", "main", "CT", "-"}));
+    EXPECT_EQ(every[h1 + 49], (Step{h1 + 49, "highlight", "main", "CT", "-"}));
+    fs::remove_all(dir);
+}
+
+TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
+    const fs::path dir = temp_dir("board");
+    std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";
+    auto r = run_endotower("sim --board " + (dir / "a.yaml").string() + " --input x --out o.avi");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("a.yaml:4: field 'sci.dwel_ms': unknown key"), std::string::npos)
+        << r.output;
+    std::ofstream(dir / "b.yaml") << "board: t\nsci:\n  layout: pie\n";
+    r = run_endotower("sim --board " + (dir / "b.yaml").string() + " --input x --out o.avi");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.output.find("b.yaml:3: field 'sci.layout': unknown layout 'pie' (expected buttons, "
+                            "ring or three_level)"),
+              std::string::npos)
+        << r.output;
+    std::ofstream(dir / "c.yaml") << "board: t\nsci:\n  dwell_ms: 50\n";
+    r = run_endotower("sim --board " + (dir / "c.yaml").string() + " --input x --out o.avi");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(
+        r.output.find("c.yaml:3: field 'sci.dwell_ms': must be between 100 and 60000, got 50"),
+        std::string::npos)
+        << r.output;
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace endotower::sci
