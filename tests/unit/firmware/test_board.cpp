@@ -64,6 +64,16 @@ TEST(Board, ValuesAndRelativePaths) {
     EXPECT_EQ(b.region_min_inliers, 12);
     EXPECT_EQ(b.region_detect_max_width, 640);
     EXPECT_FALSE(b.region_propagate);
+    EXPECT_FALSE(b.region_mark_with_tool);  // the defaults
+    EXPECT_TRUE(b.fov_mask);
+    const std::string r = write_board("marking.yaml",
+                                      "board: t\n"
+                                      "analysis:\n"
+                                      "  fov_mask: false\n"
+                                      "  regions: {mark_with_tool: true}\n");
+    ASSERT_TRUE(load_board(r, b, err)) << err;
+    EXPECT_TRUE(b.region_mark_with_tool);
+    EXPECT_FALSE(b.fov_mask);
 }
 
 TEST(Board, CalibrationPathIsResolvedAgainstTheBoardFile) {
@@ -154,7 +164,12 @@ TEST(Board, ErrorsNameTheLineAndField) {
          "3: field 'analysis.regions.min_inliers': must be between 4 and 1000, got 2"},
         {"board: t\nanalysis:\n  regions:\n    redetect: 5\n",
          "4: field 'analysis.regions.redetect': unknown key (expected one of: descriptor, redetect_interval, "
-         "min_inliers, detect_max_width, propagate)"},
+         "min_inliers, detect_max_width, propagate, mark_with_tool)"},
+        {"board: t\nanalysis:\n  regions: {mark_with_tool: true}\nsci: {layout: ring}\n",
+         "3: field 'analysis.regions.mark_with_tool': not with sci: (the handle's button drives the interface); "
+         "mark regions from the timeline or --region"},
+        {"board: t\nanalysis:\n  fov_mask: sometimes\n",
+         "3: field 'analysis.fov_mask': expected true or false, got 'sometimes'"},
         {"board: t\nanalysis:\n  regions: sift\n", "3: field 'analysis.regions': expected a mapping of keys"},
         {"board: t\nvideo: [1, 2\n", "3: not valid YAML: end of sequence flow not found"},
         {"board: t\n? [a, b]\n: c\n", "2: field '(top level)': a key must be a plain name"},
