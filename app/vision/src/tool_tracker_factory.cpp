@@ -1,0 +1,23 @@
+#include "endotower/vision/tool_tracker_factory.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "endotower/vision/ekf_tool_tracker.hpp"
+
+namespace endotower::vision {
+
+namespace {
+constexpr std::array<std::string_view, 1> kNames{"ekf"};
+}  // namespace
+
+std::span<const std::string_view> book_tracker_names() { return kNames; }
+
+bool is_book_tracker(std::string_view name) { return std::find(kNames.begin(), kNames.end(), name) != kNames.end(); }
+
+std::unique_ptr<ToolTracker> make_book_tracker(std::string_view name) {
+    if (name == "ekf") return std::make_unique<EkfToolTracker>();
+    return nullptr;
+}
+
+}  // namespace endotower::vision
