@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "endotower/v4l2/capture_format.hpp"
+#include "endotower/vision/tool_tracker_factory.hpp"
 
 namespace endotower::firmware {
 
@@ -225,9 +226,13 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
         if (c.stage != "status_badge" && c.stage != "none")
             return r.fail(a["stage"], "analysis.stage",
                           "unknown stage '" + c.stage + "' (expected status_badge or none)");
-        if (c.tracker != "none" && c.tracker != "kalman" && c.tracker != "kalman_red" && c.tracker != "likelihood")
+        if (c.tracker != "none" && c.tracker != "kalman" && c.tracker != "kalman_red" && c.tracker != "likelihood" &&
+            !vision::is_book_tracker(c.tracker)) {
+            std::string names;
+            for (std::string_view n : vision::book_tracker_names()) names += ", " + std::string(n);
             return r.fail(a["tracker"], "analysis.tracker",
-                          "unknown tracker '" + c.tracker + "' (expected none, kalman, kalman_red or likelihood)");
+                          "unknown tracker '" + c.tracker + "' (expected none, kalman, kalman_red, likelihood" + names + ")");
+        }
         if (c.tracker == "likelihood" && c.tool_model.empty())
             return r.fail(a["tracker"], "analysis.tracker",
                           "the likelihood tracker needs analysis.tool_model (a file of 'endotower train-tool-model')");

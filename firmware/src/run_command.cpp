@@ -22,6 +22,7 @@
 #include "endotower/system/syscall.hpp"
 #include "endotower/usb/usb_hotplug.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
+#include "endotower/vision/tool_tracker_factory.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
 namespace endotower::firmware {
@@ -161,8 +162,9 @@ int run_run_command(const Args& args) {
     app::StatusBadge badge;
     vision::KalmanToolTrackerParams tracker_params;
     tracker_params.red_binarised = board.tracker == "kalman_red";
-    vision::KalmanToolTracker tracker(tracker_params);
-    vision::ToolTrackingStage tracking(tracker);
+    vision::KalmanToolTracker kalman(tracker_params);
+    const std::unique_ptr<vision::ToolTracker> book_tracker = vision::make_book_tracker(board.tracker);
+    vision::ToolTrackingStage tracking(book_tracker ? *book_tracker : static_cast<vision::ToolTracker&>(kalman));
     app::StageChain chain;
     if (board.stage == "status_badge") chain.add(&badge);
     if (board.tracker != "none") chain.add(&tracking);

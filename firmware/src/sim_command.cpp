@@ -28,6 +28,7 @@
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/region_stage.hpp"
+#include "endotower/vision/tool_tracker_factory.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
 #ifndef ENDOTOWER_DEFAULT_BOARD
@@ -250,7 +251,10 @@ int run_sim_command(const Args& args) {
         return kExitBadInput;
     }
     vision::LikelihoodToolTracker likelihood(tool_model);
-    vision::ToolTracker& tracker = board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(likelihood) : kalman;
+    const std::unique_ptr<vision::ToolTracker> book_tracker = vision::make_book_tracker(board.tracker);
+    vision::ToolTracker& tracker = book_tracker                   ? *book_tracker
+                                   : board.tracker == "likelihood" ? static_cast<vision::ToolTracker&>(likelihood)
+                                                                   : kalman;
     vision::ToolTrackingStage tracking(tracker);
     vision::RegionTrackerParams region_params;
     vision::parse_region_descriptor(board.region_descriptor, region_params.descriptor);  // checked by the board parser

@@ -4,11 +4,13 @@
 #include <array>
 
 #include "endotower/vision/ekf_tool_tracker.hpp"
+#include "endotower/vision/mhi_tool_tracker.hpp"
+#include "endotower/vision/mog2_tool_tracker.hpp"
 
 namespace endotower::vision {
 
 namespace {
-constexpr std::array<std::string_view, 1> kNames{"ekf"};
+constexpr std::array<std::string_view, 3> kNames{"ekf", "mog2", "mhi"};
 }  // namespace
 
 std::span<const std::string_view> book_tracker_names() { return kNames; }
@@ -17,6 +19,8 @@ bool is_book_tracker(std::string_view name) { return std::find(kNames.begin(), k
 
 std::unique_ptr<ToolTracker> make_book_tracker(std::string_view name) {
     if (name == "ekf") return std::make_unique<EkfToolTracker>();
+    if (name == "mog2") return std::make_unique<Mog2ToolTracker>();
+    if (name == "mhi") return std::make_unique<MhiToolTracker>();
     return nullptr;
 }
 

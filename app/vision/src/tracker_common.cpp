@@ -131,7 +131,11 @@ bool RegionDescriber::describe(const AnalysisFrame& a, const cv::Mat& mask, cv::
 
     const Point2 end_lo{roi.x + cx + t_lo * dx, roi.y + cy + t_lo * dy};
     const Point2 end_hi{roi.x + cx + t_hi * dx, roi.y + cy + t_hi * dy};
-    const bool lo_is_incision = a.rim_distance(end_lo) <= a.rim_distance(end_hi);
+    bool lo_is_incision = a.rim_distance(end_lo) <= a.rim_distance(end_hi);
+    if (std::isfinite(params.tip_direction_deg) && std::abs(a.rim_distance(end_lo) - a.rim_distance(end_hi)) < width) {
+        const double r = params.tip_direction_deg * M_PI / 180.0;
+        lo_is_incision = std::cos(r) * dx + std::sin(r) * dy >= 0;  // +d points along the motion
+    }
     const Point2 incision = lo_is_incision ? end_lo : end_hi;
     const double sign = lo_is_incision ? 1.0 : -1.0;  // along +d towards the tip?
     const double t_tip = lo_is_incision ? t_hi : t_lo;

@@ -11,6 +11,7 @@
 // is allocated per frame.
 #pragma once
 
+#include <limits>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -41,6 +42,9 @@ struct RegionShapeParams {
     double min_elongation = 2.0;       // length / width
     double tip_fraction = 0.03;
     double head_widths = 2.7;  // the likelihood tracker's measured tip-to-head distance
+    // When both ends are about as far from the rim (within a width), the tip is the
+    // end towards this image direction (degrees, e.g. the motion's), if finite.
+    double tip_direction_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
 class RegionDescriber {

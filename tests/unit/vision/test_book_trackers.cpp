@@ -11,6 +11,8 @@
 
 #include "book_tracker_test_util.hpp"
 #include "endotower/vision/ekf_tool_tracker.hpp"
+#include "endotower/vision/mhi_tool_tracker.hpp"
+#include "endotower/vision/mog2_tool_tracker.hpp"
 #include "endotower/vision/tool_tracker_factory.hpp"
 
 namespace endotower::vision {
@@ -132,6 +134,58 @@ TEST(EkfToolTracker, AllocationsOnlyInsideOpenCV) {
     // blur + Canny + erode (the lit mask) + threshold/cvtColor: about 70 per frame when
     // measured alone; Canny's edge stacks grow with the edges of a real frame. A
     // container of ours growing per frame (pixels, votes) would add hundreds.
+    EXPECT_LE(allocations_per_frame(tracker, 10, 20), 20 * 150);
+}
+
+// Tissue alone for 10 frames (the background is learned), then the sweeping shaft.
+ShaftTruth enters_after_10(int t) { return t < 10 ? ShaftTruth{} : sweeping(t - 10); }
+
+// ---- mog2
+
+TEST(Mog2ToolTracker, FindsAToolMovingOverALearnedBackground) {
+    Mog2ToolTracker tracker;
+    const Errors e = run(tracker, enters_after_10, 25, 10);
+    EXPECT_EQ(e.found, 15);
+    // Region geometry at 320 px (a quarter of this frame): 20 px is 0.45 shaft widths.
+    EXPECT_LT(e.worst_tip, 20.0);
+    EXPECT_LT(e.worst_axis, 3.0);
+}
+
+TEST(Mog2ToolTracker, NoToolOnStillTissueOrBlack) {
+    Mog2ToolTracker tracker;
+    EXPECT_EQ(track_still(tracker, cv::Scalar(85, 75, 185), 10), 0u);
+    EXPECT_EQ(track_still(tracker, cv::Scalar(0, 0, 0), 5), 0u);
+}
+
+TEST(Mog2ToolTracker, AllocationsOnlyInsideOpenCV) {
+    Mog2ToolTracker tracker;
+    EXPECT_LE(allocations_per_frame(tracker, 10, 20), 20 * 150);
+}
+
+// ---- mhi
+
+TEST(MhiToolTracker, FindsAMovingToolByTheBooksRule) {
+    MhiToolTracker tracker;
+    const Errors e = run(tracker, enters_after_10, 25, 11);
+    EXPECT_EQ(e.found, 14);
+    // The region is the path of the last 8 frames, a wedge 8 degrees wide behind the
+    // rotating shaft: the book's rule (tip within 2 widths = 90 px, axis within 20
+    // degrees) holds, the error is the wedge's lag (4 degrees: 50 px at the tip).
+    EXPECT_LT(e.worst_tip, 90.0);
+    EXPECT_LT(e.worst_axis, 8.0);
+}
+
+TEST(MhiToolTracker, NoToolWithoutMotion) {
+    MhiToolTracker tracker;
+    EXPECT_EQ(track_still(tracker, cv::Scalar(85, 75, 185), 10), 0u);
+    EXPECT_EQ(track_still(tracker, cv::Scalar(0, 0, 0), 5), 0u);
+    // A shaft held still: no motion, no tool.
+    const Errors e = run(tracker, [](int) { return sweeping(5); }, 10, 0);
+    EXPECT_EQ(e.found, 0);
+}
+
+TEST(MhiToolTracker, AllocationsOnlyInsideOpenCV) {
+    MhiToolTracker tracker;
     EXPECT_LE(allocations_per_frame(tracker, 10, 20), 20 * 150);
 }
 
