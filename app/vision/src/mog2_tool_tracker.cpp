@@ -13,6 +13,7 @@ struct Mog2ToolTracker::Work {
     cv::Ptr<cv::BackgroundSubtractorMOG2> model;
     cv::Mat foreground, open_kernel, close_kernel;
     long frames = 0;
+    cv::Rect box;
 };
 
 Mog2ToolTracker::Mog2ToolTracker(Mog2ToolTrackerParams params) : params_(params), work_(std::make_unique<Work>()) {}
@@ -43,7 +44,19 @@ std::size_t Mog2ToolTracker::track(const hal::Frame& frame, std::span<ToolEstima
     cv::morphologyEx(w.foreground, w.foreground, cv::MORPH_CLOSE, w.close_kernel);
     cv::bitwise_and(w.foreground, w.frame.lit, w.foreground);
     const cv::Rect all(0, 0, w.foreground.cols, w.foreground.rows);
-    return w.region.describe(w.frame, w.foreground, all, {}, 0, out[0]) ? 1 : 0;
+    w.box = {};
+    if (!w.region.describe(w.frame, w.foreground, all, {}, 0, out[0])) return 0;
+    w.box = cv::boundingRect(w.foreground);
+    return 1;
+}
+
+void Mog2ToolTracker::last_box(int box[4]) const {
+    const Work& w = *work_;
+    const double inv = w.frame.scale > 0 ? 1.0 / w.frame.scale : 1.0;
+    box[0] = static_cast<int>(w.box.x * inv);
+    box[1] = static_cast<int>(w.box.y * inv);
+    box[2] = static_cast<int>(w.box.width * inv);
+    box[3] = static_cast<int>(w.box.height * inv);
 }
 
 }  // namespace endotower::vision

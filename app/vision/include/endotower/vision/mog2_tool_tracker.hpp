@@ -32,6 +32,9 @@ public:
     std::string_view name() const override { return "mog2"; }
     void configure(const hal::FrameFormat& format) override;
     std::size_t track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) override;
+    // The last frame's tool region's bounding box in full-resolution pixels (x, y,
+    // width, height; all 0 when no tool): the hybrid tracker starts from it.
+    void last_box(int box[4]) const;
 
 private:
     struct Work;
