@@ -103,7 +103,7 @@ bool window_peak(const std::vector<cv::Point>& pixels, Polar predicted, double h
     return true;
 }
 
-// The longest run of edge pixels within 1.5 px of the line (gaps up to `gap` px).
+// The longest run of edge pixels within 2 px of the line (gaps up to `gap` px).
 bool line_extent(const std::vector<cv::Point>& pixels, Polar l, double gap, std::vector<int>& run, Segment& out) {
     const double c = std::cos(l.theta), s = std::sin(l.theta);
     const double px = l.rho * c, py = l.rho * s;  // foot of the origin's perpendicular
@@ -111,7 +111,7 @@ bool line_extent(const std::vector<cv::Point>& pixels, Polar l, double gap, std:
     const int half = static_cast<int>(run.size() / 2);
     std::fill(run.begin(), run.end(), 0);
     for (const cv::Point& q : pixels) {
-        if (std::abs(q.x * c + q.y * s - l.rho) > 1.5) continue;
+        if (std::abs(q.x * c + q.y * s - l.rho) > 2.0) continue;
         const long t = std::lround((q.x - px) * dx + (q.y - py) * dy) + half;
         if (t >= 0 && t < static_cast<long>(run.size())) run[static_cast<std::size_t>(t)] = 1;
     }
@@ -187,7 +187,9 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
         measured = window_peak(w.pixels, p1, params_.window_theta_deg * deg, params_.theta_step_deg * deg, half_rho,
                                min_votes, w.votes, e1) &&
                    window_peak(w.pixels, p2, params_.window_theta_deg * deg, params_.theta_step_deg * deg, half_rho,
-                               min_votes, w.votes, e2);
+                               min_votes, w.votes, e2) &&
+                   // Two peaks closer than a shaft's width are one edge found twice.
+                   std::abs(aligned(e2, e1.theta).rho - e1.rho) >= params_.min_width_px;
         if (measured) {
             // Correction with M of eq. 4.21: the state's edge parameters are measured.
             Eigen::Matrix<double, 4, 9> m = Eigen::Matrix<double, 4, 9>::Zero();
@@ -201,8 +203,8 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
             w.x += k * (z - m * w.x);
             w.p = (Cov::Identity() - k * m) * w.p;
             w.missed = 0;
-            e1 = {w.x(kT1), w.x(kR1)};
-            e2 = {w.x(kT2), w.x(kR2)};
+            // The edges' extent is read along the measured lines (the posterior is
+            // smoothed and may sit a pixel off the edge pixels).
         } else if (++w.missed > params_.max_missed) {
             w.tracking = false;
         }
