@@ -72,7 +72,12 @@ void ColourParticleFilter::init(cv::Rect box) {
     histogram(box, reference_);
     reference_size_ = cv::Size2d(std::max(4, box.width), std::max(4, box.height));
     histogram(cv::Rect(0, 0, size_.width, size_.height), frame_hist_);
-    for (std::size_t i = 0; i < reference_.size(); ++i) target_bin_[i] = reference_[i] > frame_hist_[i];
+    // The tool's colours: twice as frequent in the reference as in the frame, and of
+    // low saturation (steel and black plastic are grey; the book's observation that
+    // the tool's region is darker or brighter than tissue, with its hue unreliable).
+    for (std::size_t i = 0; i < reference_.size(); ++i)
+        target_bin_[i] = reference_[i] > 2 * frame_hist_[i] &&
+                         static_cast<int>(i) % params_.sat_bins < params_.sat_bins * params_.max_tool_saturation / 256;
     for (Particle& p : particles_) {
         p = {box.x + box.width / 2.0 + rng_.gaussian(params_.position_noise),
              box.y + box.height / 2.0 + rng_.gaussian(params_.position_noise),

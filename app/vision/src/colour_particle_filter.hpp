@@ -24,6 +24,7 @@ struct ColourParticleFilterParams {
     double lambda = 20;
     double position_noise = 4, velocity_noise = 1.5, size_noise = 1;
     double lost_distance = 0.6;
+    int max_tool_saturation = 96;  // is_target_colour: HSV saturation below this
     double size_range = 1.25;  // the rectangle's size within 1/1.25 .. 1.25 x the reference's
     bool sorted_resampling = false;
     unsigned seed = 5;
@@ -43,7 +44,8 @@ public:
     cv::Rect step();
     bool lost() const { return distance_ > params_.lost_distance; }
     double distance() const { return distance_; }
-    // P(bin) of the reference over P(bin) in the whole frame at init > 1: tool colour.
+    // The tool's colour: P(bin) in the reference > 2 x P(bin) in the whole frame at
+    // init, and saturation below `max_tool_saturation` (tools are grey).
     bool is_target_colour(int y, int x) const;
 
 private:
