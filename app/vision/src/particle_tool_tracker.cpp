@@ -67,7 +67,9 @@ std::size_t ParticleToolTracker::track(const hal::Frame& frame, std::span<ToolEs
         const std::uint8_t* lit = w.frame.lit.ptr<std::uint8_t>(y);
         for (int x = box.x; x < box.x + box.width; ++x) row[x] = lit[x] && w.filter.is_target_colour(y, x) ? 255 : 0;
     }
-    return w.region.describe(w.frame, w.mask, box, {}, w.id, out[0]) ? 1 : 0;
+    detail::RegionShapeParams shape;
+    shape.largest_component = true;
+    return w.region.describe(w.frame, w.mask, box, shape, w.id, out[0]) ? 1 : 0;
 }
 
 }  // namespace endotower::vision

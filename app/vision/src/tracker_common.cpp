@@ -100,7 +100,17 @@ bool RegionDescriber::describe(const AnalysisFrame& a, const cv::Mat& mask, cv::
                                const RegionShapeParams& params, int id, ToolEstimate& e) {
     roi &= cv::Rect(0, 0, mask.cols, mask.rows);
     if (roi.empty() || histogram_.empty()) return false;
-    const cv::Mat sub = mask(roi);
+    cv::Mat sub = mask(roi);
+    if (params.largest_component) {
+        // Scattered blobs of the tool's colour elsewhere would turn the axis.
+        const int n = cv::connectedComponentsWithStats(sub, labels_, stats_, centroids_, 8, CV_32S);
+        int best = 0;
+        for (int i = 1; i < n; ++i)
+            if (best == 0 || stats_.at<int>(i, cv::CC_STAT_AREA) > stats_.at<int>(best, cv::CC_STAT_AREA)) best = i;
+        if (best == 0) return false;
+        cv::compare(labels_, best, component_, cv::CMP_EQ);
+        sub = component_;
+    }
     const cv::Moments m = cv::moments(sub, true);
     if (m.m00 < params.min_area_fraction * mask.rows * mask.cols) return false;
     const double cx = m.m10 / m.m00, cy = m.m01 / m.m00;

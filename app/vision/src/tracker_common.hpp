@@ -45,6 +45,7 @@ struct RegionShapeParams {
     // When both ends are about as far from the rim (within a width), the tip is the
     // end towards this image direction (degrees, e.g. the motion's), if finite.
     double tip_direction_deg = std::numeric_limits<double>::quiet_NaN();
+    bool largest_component = false;  // only the mask's largest 8-connected component
 };
 
 class RegionDescriber {
@@ -56,6 +57,7 @@ public:
 
 private:
     std::vector<int> histogram_;
+    cv::Mat labels_, stats_, centroids_, component_;
 };
 
 // Angle between two axis directions as lines, degrees in [0, 90].

@@ -7,12 +7,12 @@
 // N_eff < N/2. As the book does (eq. 5.9's text), the reference rectangle comes from
 // the motion history image (MhiToolTracker's moving region), and again whenever the
 // filter is lost (the estimate's distance to the reference above 0.6).
-// The tool: the pixels whose hue-saturation bin is more likely in the reference than
-// in the whole frame at initialisation, in the lit field of view, inside the
-// rectangle grown by half its size per side (along a shaft the histogram does not
-// change with the rectangle's length, so it often stops short of the tip);
-// RegionDescriber gives axis, tip, head and edges. One tool; full-resolution
-// coordinates. Deterministic (fixed seed).
+// The tool: the pixels of low saturation whose hue-saturation bin is twice as likely
+// in the reference as in the whole frame at initialisation, in the lit field of view,
+// inside the rectangle grown by half its size per side (along a shaft the histogram
+// does not change with the rectangle's length, so it often stops short of the tip);
+// their largest 8-connected component gives axis, tip, head and edges
+// (RegionDescriber). One tool; full-resolution coordinates. Deterministic (fixed seed).
 #pragma once
 
 #include <memory>
