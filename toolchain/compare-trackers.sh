@@ -13,10 +13,10 @@ mkdir -p "$W"
 for s in $SUITES; do
     [ -f "$W/$s/truth.jsonl" ] || "$B" scene --scenario "board/sim/scenarios/$s.yaml" --out "$W/$s" >/dev/null
 done
-median_ms() {  # median of stages_us.analysis over a trace, in ms
+median_ms() {  # median of stages_us.analysis over a trace's frames that ran the tracker, in ms
     python3 -c 'import json,sys
-v=sorted(json.loads(l)["stages_us"].get("analysis",0) for l in open(sys.argv[1]))
-print("%.1f" % (v[len(v)//2]/1000.0))' "$1"
+v=sorted(u for u in (json.loads(l)["stages_us"].get("analysis",0) for l in open(sys.argv[1])) if u > 0)
+print("%.1f" % (v[len(v)//2]/1000.0) if v else "-")' "$1"
 }
 # tool_leaves: frames from the tool's return into view to the first frame it is
 # found again by the book's rule (tip within 2 widths, axis within 20 degrees), and
