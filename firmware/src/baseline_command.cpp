@@ -50,13 +50,19 @@ int run_baseline_command(const Args& args) {
         }
         if (i + 1 >= args.size()) return usage_error("option " + k + " needs a value");
         const std::string& v = args[++i];
-        if (k == "--tracker") kind = v;
-        else if (k == "--scene") scene = v;
-        else if (k == "--trace") trace_path = v;
-        else return usage_error("unknown option '" + k + "'");
+        if (k == "--tracker")
+            kind = v;
+        else if (k == "--scene")
+            scene = v;
+        else if (k == "--trace")
+            trace_path = v;
+        else
+            return usage_error("unknown option '" + k + "'");
     }
-    if (kind != "csrt" && kind != "kcf") return usage_error("--tracker is csrt or kcf, got '" + kind + "'");
-    if (scene.empty() || trace_path.empty()) return usage_error("give --scene DIR and --trace FILE");
+    if (kind != "csrt" && kind != "kcf")
+        return usage_error("--tracker is csrt or kcf, got '" + kind + "'");
+    if (scene.empty() || trace_path.empty())
+        return usage_error("give --scene DIR and --trace FILE");
 
     std::vector<eval::TruthFrame> truth;
     std::string error;
@@ -85,16 +91,18 @@ int run_baseline_command(const Args& args) {
             std::fprintf(stderr, "endotower baseline: cannot read %s\n", frames[i].c_str());
             return kExitBadInput;
         }
-        nlohmann::json line = {{"frame", i}, {"seq", i}, {"capture_ns", 0}, {"present_ns", 0}, {"latency_ns", 0},
-                               {"late", false}, {"passthrough", false}, {"analysis_age", 0},
-                               {"tools", nlohmann::json::array()}};
+        nlohmann::json line = {
+            {"frame", i},           {"seq", i},          {"capture_ns", 0},
+            {"present_ns", 0},      {"latency_ns", 0},   {"late", false},
+            {"passthrough", false}, {"analysis_age", 0}, {"tools", nlohmann::json::array()}};
         const auto t0 = std::chrono::steady_clock::now();
         cv::Rect box;
         bool have = false;
         if (!started && !truth[i].tools.empty() && truth[i].tools[0].visible) {
             tool0 = truth[i].tools[0];
             const double m = std::max(4.0, tool0.width_px);
-            const cv::Rect2d b(std::min(tool0.tip_px.x, tool0.head_px.x) - m, std::min(tool0.tip_px.y, tool0.head_px.y) - m,
+            const cv::Rect2d b(std::min(tool0.tip_px.x, tool0.head_px.x) - m,
+                               std::min(tool0.tip_px.y, tool0.head_px.y) - m,
                                std::abs(tool0.tip_px.x - tool0.head_px.x) + 2 * m,
                                std::abs(tool0.tip_px.y - tool0.head_px.y) + 2 * m);
             box0 = cv::Rect(b) & cv::Rect(0, 0, img.cols, img.rows);
@@ -107,16 +115,23 @@ int run_baseline_command(const Args& args) {
             have = tracker->update(img, box);
             lost = !have;
         }
-        const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0);
+        const auto us = std::chrono::duration_cast<std::chrono::microseconds>(
+            std::chrono::steady_clock::now() - t0);
         line["stages_us"] = {{"analysis", us.count()}};
         if (have && box0.width > 0 && box0.height > 0) {
             // The initial tip and head, moved and scaled with the box.
-            const double sx = static_cast<double>(box.width) / box0.width, sy = static_cast<double>(box.height) / box0.height;
+            const double sx = static_cast<double>(box.width) / box0.width,
+                         sy = static_cast<double>(box.height) / box0.height;
             auto carry = [&](eval::Point2 p) {
-                return nlohmann::json::array({box.x + (p.x - box0.x) * sx, box.y + (p.y - box0.y) * sy});
+                return nlohmann::json::array(
+                    {box.x + (p.x - box0.x) * sx, box.y + (p.y - box0.y) * sy});
             };
-            line["tools"].push_back({{"id", 0}, {"tip_px", carry(tool0.tip_px)}, {"head_px", carry(tool0.head_px)},
-                                     {"axis_deg", tool0.axis_deg}, {"confidence", 1.0}, {"tip_mm", nullptr}});
+            line["tools"].push_back({{"id", 0},
+                                     {"tip_px", carry(tool0.tip_px)},
+                                     {"head_px", carry(tool0.head_px)},
+                                     {"axis_deg", tool0.axis_deg},
+                                     {"confidence", 1.0},
+                                     {"tip_mm", nullptr}});
         }
         out += line.dump() + "\n";
     }

@@ -3,13 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <opencv2/imgproc.hpp>
 
 #include "endotower/vision/particle_resampling.hpp"
-#include <opencv2/imgproc.hpp>
 
 namespace endotower::vision::detail {
 
-ColourParticleFilter::ColourParticleFilter(ColourParticleFilterParams params) : params_(params), rng_(params.seed) {}
+ColourParticleFilter::ColourParticleFilter(ColourParticleFilterParams params)
+    : params_(params), rng_(params.seed) {}
 
 void ColourParticleFilter::configure(cv::Size image) {
     size_ = image;
@@ -36,8 +37,9 @@ void ColourParticleFilter::load(const cv::Mat& bgr) {
         const cv::Vec3b* in = hsv_.ptr<cv::Vec3b>(y);
         std::uint8_t* out = bins_.ptr<std::uint8_t>(y);
         for (int x = 0; x < hsv_.cols; ++x)
-            out[x] = static_cast<std::uint8_t>((in[x][0] * params_.hue_bins / 180) * params_.sat_bins +
-                                               in[x][1] * params_.sat_bins / 256);
+            out[x] =
+                static_cast<std::uint8_t>((in[x][0] * params_.hue_bins / 180) * params_.sat_bins +
+                                          in[x][1] * params_.sat_bins / 256);
     }
 }
 
@@ -56,7 +58,8 @@ void ColourParticleFilter::histogram(cv::Rect box, std::vector<float>& h) const 
         for (float& v : h) v /= n;
 }
 
-double ColourParticleFilter::bhattacharyya_distance(const std::vector<float>& a, const std::vector<float>& b) {
+double ColourParticleFilter::bhattacharyya_distance(const std::vector<float>& a,
+                                                    const std::vector<float>& b) {
     double rho = 0;  // eq. 5.7
     for (std::size_t i = 0; i < a.size(); ++i) rho += std::sqrt(static_cast<double>(a[i]) * b[i]);
     return std::sqrt(std::max(0.0, 1.0 - rho));  // eq. 5.10
@@ -64,8 +67,9 @@ double ColourParticleFilter::bhattacharyya_distance(const std::vector<float>& a,
 
 cv::Rect ColourParticleFilter::box_of(const Particle& p) const {
     const double w = std::max(4.0, p[4]), h = std::max(4.0, p[5]);
-    return cv::Rect(static_cast<int>(std::lround(p[0] - w / 2)), static_cast<int>(std::lround(p[1] - h / 2)),
-                    static_cast<int>(std::lround(w)), static_cast<int>(std::lround(h)));
+    return cv::Rect(static_cast<int>(std::lround(p[0] - w / 2)),
+                    static_cast<int>(std::lround(p[1] - h / 2)), static_cast<int>(std::lround(w)),
+                    static_cast<int>(std::lround(h)));
 }
 
 void ColourParticleFilter::init(cv::Rect box) {
@@ -77,7 +81,8 @@ void ColourParticleFilter::init(cv::Rect box) {
     // the tool's region is darker or brighter than tissue, with its hue unreliable).
     for (std::size_t i = 0; i < reference_.size(); ++i)
         target_bin_[i] = reference_[i] > 2 * frame_hist_[i] &&
-                         static_cast<int>(i) % params_.sat_bins < params_.sat_bins * params_.max_tool_saturation / 256;
+                         static_cast<int>(i) % params_.sat_bins <
+                             params_.sat_bins * params_.max_tool_saturation / 256;
     for (Particle& p : particles_) {
         p = {box.x + box.width / 2.0 + rng_.gaussian(params_.position_noise),
              box.y + box.height / 2.0 + rng_.gaussian(params_.position_noise),
@@ -110,9 +115,11 @@ cv::Rect ColourParticleFilter::step() {
         p[7] += rng_.gaussian(0.25 * params_.size_noise);
         // The size stays within `size_range` of the reference's: along a shaft the
         // histogram cannot tell the rectangle's length, and it would wander off.
-        p[4] = std::clamp(p[4] + p[6] + rng_.gaussian(params_.size_noise), reference_size_.width / params_.size_range,
+        p[4] = std::clamp(p[4] + p[6] + rng_.gaussian(params_.size_noise),
+                          reference_size_.width / params_.size_range,
                           reference_size_.width * params_.size_range);
-        p[5] = std::clamp(p[5] + p[7] + rng_.gaussian(params_.size_noise), reference_size_.height / params_.size_range,
+        p[5] = std::clamp(p[5] + p[7] + rng_.gaussian(params_.size_noise),
+                          reference_size_.height / params_.size_range,
                           reference_size_.height * params_.size_range);
         // Weight (eq. 5.10-5.11).
         histogram(box_of(p), scratch_);
@@ -120,7 +127,8 @@ cv::Rect ColourParticleFilter::step() {
         weights_[i] *= std::exp(-params_.lambda * d * d);
         sum += weights_[i];
     }
-    if (sum <= 0) std::fill(weights_.begin(), weights_.end(), 1.0 / params_.particles);
+    if (sum <= 0)
+        std::fill(weights_.begin(), weights_.end(), 1.0 / params_.particles);
     else
         for (double& w : weights_) w /= sum;
     Particle mean{};
@@ -133,9 +141,12 @@ cv::Rect ColourParticleFilter::step() {
     // Resampling when the effective sample size is low (eq. 5.12).
     const int n = params_.particles;
     if (effective_sample_size(weights_) < n / 2.0) {
-        if (params_.sorted_resampling) sorted_resampling(weights_, order_, source_);
-        else systematic_resampling(weights_, rng_.uniform(0.0, 1.0 / n), source_);
-        for (std::size_t k = 0; k < particles_.size(); ++k) resampled_[k] = particles_[static_cast<std::size_t>(source_[k])];
+        if (params_.sorted_resampling)
+            sorted_resampling(weights_, order_, source_);
+        else
+            systematic_resampling(weights_, rng_.uniform(0.0, 1.0 / n), source_);
+        for (std::size_t k = 0; k < particles_.size(); ++k)
+            resampled_[k] = particles_[static_cast<std::size_t>(source_[k])];
         particles_.swap(resampled_);
         std::fill(weights_.begin(), weights_.end(), 1.0 / n);
     }

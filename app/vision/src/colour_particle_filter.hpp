@@ -25,7 +25,7 @@ struct ColourParticleFilterParams {
     double position_noise = 4, velocity_noise = 1.5, size_noise = 1;
     double lost_distance = 0.6;
     int max_tool_saturation = 96;  // is_target_colour: HSV saturation below this
-    double size_range = 1.25;  // the rectangle's size within 1/1.25 .. 1.25 x the reference's
+    double size_range = 1.25;      // the rectangle's size within 1/1.25 .. 1.25 x the reference's
     bool sorted_resampling = false;
     unsigned seed = 5;
 };

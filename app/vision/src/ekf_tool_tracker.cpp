@@ -49,7 +49,8 @@ struct EkfToolTracker::Work {
     int missed = 0, id = -1;
 };
 
-EkfToolTracker::EkfToolTracker(EkfToolTrackerParams params) : params_(params), work_(std::make_unique<Work>()) {}
+EkfToolTracker::EkfToolTracker(EkfToolTrackerParams params)
+    : params_(params), work_(std::make_unique<Work>()) {}
 
 EkfToolTracker::~EkfToolTracker() = default;
 
@@ -62,7 +63,8 @@ void EkfToolTracker::configure(const hal::FrameFormat& format) {
     w.pixels.reserve(static_cast<std::size_t>(sz.area()));
     w.lines.reserve(4096);
     w.segments.reserve(4096);
-    const int nt = 2 * static_cast<int>(std::ceil(params_.window_theta_deg / params_.theta_step_deg)) + 1;
+    const int nt =
+        2 * static_cast<int>(std::ceil(params_.window_theta_deg / params_.theta_step_deg)) + 1;
     const int nr = 2 * static_cast<int>(std::ceil(params_.window_rho_px)) + 1;
     w.votes.assign(static_cast<std::size_t>(nt * nr), 0);
     w.run.assign(static_cast<std::size_t>(2 * std::ceil(std::hypot(sz.width, sz.height)) + 3), 0);
@@ -72,8 +74,9 @@ void EkfToolTracker::configure(const hal::FrameFormat& format) {
 namespace {
 
 // Fig. 4.16: the Hough peak inside the window around the predicted edge.
-bool window_peak(const std::vector<cv::Point>& pixels, Polar predicted, double half_theta, double step,
-                 double half_rho, int min_votes, std::vector<int>& votes, Polar& peak) {
+bool window_peak(const std::vector<cv::Point>& pixels, Polar predicted, double half_theta,
+                 double step, double half_rho, int min_votes, std::vector<int>& votes,
+                 Polar& peak) {
     const int kt = static_cast<int>(std::ceil(half_theta / step));
     const int kr = static_cast<int>(std::ceil(half_rho));
     const int nr = 2 * kr + 1;
@@ -104,7 +107,8 @@ bool window_peak(const std::vector<cv::Point>& pixels, Polar predicted, double h
 }
 
 // The longest run of edge pixels within 2 px of the line (gaps up to `gap` px).
-bool line_extent(const std::vector<cv::Point>& pixels, Polar l, double gap, std::vector<int>& run, Segment& out) {
+bool line_extent(const std::vector<cv::Point>& pixels, Polar l, double gap, std::vector<int>& run,
+                 Segment& out) {
     const double c = std::cos(l.theta), s = std::sin(l.theta);
     const double px = l.rho * c, py = l.rho * s;  // foot of the origin's perpendicular
     const double dx = -s, dy = c;
@@ -164,7 +168,8 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
             const double th = s(k), th1 = s(k) + s(kW);
             xp(k) = th1;
             a(k, kW) = 1;
-            xp(r) = s(r) - s(kX) * std::cos(th) - s(kY) * std::sin(th) + xp(kX) * std::cos(th1) + xp(kY) * std::sin(th1);
+            xp(r) = s(r) - s(kX) * std::cos(th) - s(kY) * std::sin(th) + xp(kX) * std::cos(th1) +
+                    xp(kY) * std::sin(th1);
             a(r, kX) = -std::cos(th) + std::cos(th1);
             a(r, kY) = -std::sin(th) + std::sin(th1);
             a(r, kU) = std::cos(th1);
@@ -174,9 +179,9 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
             a(r, k) = s(kX) * std::sin(th) - s(kY) * std::cos(th) + dth1;
         }
         Eigen::Matrix<double, 9, 1> q;
-        q << params_.process_noise_xy, params_.process_noise_xy, params_.process_noise_uv, params_.process_noise_uv,
-            params_.process_noise_w, params_.process_noise_theta, params_.process_noise_rho, params_.process_noise_theta,
-            params_.process_noise_rho;
+        q << params_.process_noise_xy, params_.process_noise_xy, params_.process_noise_uv,
+            params_.process_noise_uv, params_.process_noise_w, params_.process_noise_theta,
+            params_.process_noise_rho, params_.process_noise_theta, params_.process_noise_rho;
         w.x = xp;
         w.p = a * w.p * a.transpose();
         w.p.diagonal() += q;
@@ -184,10 +189,10 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
         const Polar p1{w.x(kT1), w.x(kR1)}, p2{w.x(kT2), w.x(kR2)};
         const double spacing = std::abs(aligned(p2, p1.theta).rho - p1.rho);
         const double half_rho = std::clamp(0.4 * spacing, 2.0, params_.window_rho_px);
-        measured = window_peak(w.pixels, p1, params_.window_theta_deg * deg, params_.theta_step_deg * deg, half_rho,
-                               min_votes, w.votes, e1) &&
-                   window_peak(w.pixels, p2, params_.window_theta_deg * deg, params_.theta_step_deg * deg, half_rho,
-                               min_votes, w.votes, e2) &&
+        measured = window_peak(w.pixels, p1, params_.window_theta_deg * deg,
+                               params_.theta_step_deg * deg, half_rho, min_votes, w.votes, e1) &&
+                   window_peak(w.pixels, p2, params_.window_theta_deg * deg,
+                               params_.theta_step_deg * deg, half_rho, min_votes, w.votes, e2) &&
                    // Two peaks closer than a shaft's width are one edge found twice.
                    std::abs(aligned(e2, e1.theta).rho - e1.rho) >= params_.min_width_px;
         if (measured) {
@@ -215,11 +220,13 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
         cv::HoughLinesP(w.edges, w.lines, 1, CV_PI / 360, params_.hough_threshold,
                         params_.min_length_fraction * small.cols, 10);
         w.segments.clear();
-        for (const cv::Vec4i& l : w.lines) w.segments.push_back({{double(l[0]), double(l[1])}, {double(l[2]), double(l[3])}});
+        for (const cv::Vec4i& l : w.lines)
+            w.segments.push_back({{double(l[0]), double(l[1])}, {double(l[2]), double(l[3])}});
         std::sort(w.segments.begin(), w.segments.end(),
                   [](const Segment& a, const Segment& b) { return a.length() > b.length(); });
         const EdgePair pair = pair_edges(w.segments);
-        if (!pair.found || pair.width_px < params_.min_width_px || pair.width_px > params_.max_width_fraction * small.cols)
+        if (!pair.found || pair.width_px < params_.min_width_px ||
+            pair.width_px > params_.max_width_fraction * small.cols)
             return 0;
         e1 = polar_of(pair.e1);
         e2 = aligned(polar_of(pair.e2), e1.theta);
@@ -240,7 +247,9 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
     if (!measured) return 0;  // coasting: no tool is claimed without its edges
 
     EdgePair pair;
-    if (!line_extent(w.pixels, e1, 10, w.run, pair.e1) || !line_extent(w.pixels, e2, 10, w.run, pair.e2)) return 0;
+    if (!line_extent(w.pixels, e1, 10, w.run, pair.e1) ||
+        !line_extent(w.pixels, e2, 10, w.run, pair.e2))
+        return 0;
     // The midline: halfway between the edges, over both edges' extent.
     const Polar mid{0.5 * (e1.theta + e2.theta), 0.5 * (e1.rho + aligned(e2, e1.theta).rho)};
     const double c = std::cos(mid.theta), s = std::sin(mid.theta), dx = -s, dy = c;
@@ -250,11 +259,15 @@ std::size_t EkfToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
         t_lo = std::min(t_lo, t);
         t_hi = std::max(t_hi, t);
     }
-    pair.midline = {{mid.rho * c + t_lo * dx, mid.rho * s + t_lo * dy}, {mid.rho * c + t_hi * dx, mid.rho * s + t_hi * dy}};
-    const Point2 centre{0.5 * (pair.midline.a.x + pair.midline.b.x), 0.5 * (pair.midline.a.y + pair.midline.b.y)};
+    pair.midline = {{mid.rho * c + t_lo * dx, mid.rho * s + t_lo * dy},
+                    {mid.rho * c + t_hi * dx, mid.rho * s + t_hi * dy}};
+    const Point2 centre{0.5 * (pair.midline.a.x + pair.midline.b.x),
+                        0.5 * (pair.midline.a.y + pair.midline.b.y)};
     pair.width_px = distance_to_line(centre, pair.e1) + distance_to_line(centre, pair.e2);
     pair.found = true;
-    if (pair.width_px < params_.min_width_px || pair.width_px > params_.max_width_fraction * small.cols) return 0;
+    if (pair.width_px < params_.min_width_px ||
+        pair.width_px > params_.max_width_fraction * small.cols)
+        return 0;
     detail::describe_pair(w.frame, pair, w.id, params_.jaw_length_widths, params_.tip, out[0]);
     return 1;
 }

@@ -17,7 +17,8 @@ struct MhiToolTracker::Work {
     bool primed = false;
 };
 
-MhiToolTracker::MhiToolTracker(MhiToolTrackerParams params) : params_(params), work_(std::make_unique<Work>()) {}
+MhiToolTracker::MhiToolTracker(MhiToolTrackerParams params)
+    : params_(params), work_(std::make_unique<Work>()) {}
 
 MhiToolTracker::~MhiToolTracker() = default;
 
@@ -72,8 +73,8 @@ std::size_t MhiToolTracker::track(const hal::Frame& frame, std::span<ToolEstimat
     w.box = cv::boundingRect(w.moving);
     // Fig. 4.5-4.6: the direction of motion from the history's gradient.
     cv::motempl::calcMotionGradient(w.history, w.gradient_mask, w.orientation, 1, duration, 3);
-    const double motion_deg =
-        cv::motempl::calcGlobalOrientation(w.orientation, w.gradient_mask, w.history, w.timestamp, duration);
+    const double motion_deg = cv::motempl::calcGlobalOrientation(w.orientation, w.gradient_mask,
+                                                                 w.history, w.timestamp, duration);
     detail::RegionShapeParams shape;
     shape.tip_direction_deg = motion_deg;
     if (!w.region.describe(w.frame, w.moving, w.box, shape, 0, out[0])) return 0;

@@ -16,7 +16,8 @@ struct Mog2ToolTracker::Work {
     cv::Rect box;
 };
 
-Mog2ToolTracker::Mog2ToolTracker(Mog2ToolTrackerParams params) : params_(params), work_(std::make_unique<Work>()) {}
+Mog2ToolTracker::Mog2ToolTracker(Mog2ToolTrackerParams params)
+    : params_(params), work_(std::make_unique<Work>()) {}
 
 Mog2ToolTracker::~Mog2ToolTracker() = default;
 
@@ -28,10 +29,12 @@ void Mog2ToolTracker::configure(const hal::FrameFormat& format) {
     w.foreground.create(w.frame.small.size(), CV_8UC1);
     w.frames = 0;
     w.open_kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
-    w.close_kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(params_.close_px, params_.close_px));
+    w.close_kernel =
+        cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(params_.close_px, params_.close_px));
 }
 
-std::size_t Mog2ToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
+std::size_t Mog2ToolTracker::track(const hal::Frame& frame,
+                                   std::span<ToolEstimate, kMaxTools> out) {
     Work& w = *work_;
     if (!w.model || !w.frame.load(frame)) return 0;
     // The first frame is the background; then a fixed rate of 1/history (OpenCV's

@@ -12,7 +12,8 @@ double effective_sample_size(std::span<const double> weights) {
     return sq > 0 ? 1.0 / sq : 0.0;
 }
 
-void sorted_resampling(std::span<const double> weights, std::span<int> order, std::span<int> source) {
+void sorted_resampling(std::span<const double> weights, std::span<int> order,
+                       std::span<int> source) {
     const int n = static_cast<int>(source.size());
     std::iota(order.begin(), order.end(), 0);
     // Stable: equal weights keep their order, as in the book's example.
@@ -21,7 +22,8 @@ void sorted_resampling(std::span<const double> weights, std::span<int> order, st
     });
     int k = 0;
     for (std::size_t j = 0; j < order.size() && k < n; ++j) {
-        const int copies = std::max(1, static_cast<int>(std::ceil(weights[static_cast<std::size_t>(order[j])] * n - 1e-9)));
+        const int copies = std::max(
+            1, static_cast<int>(std::ceil(weights[static_cast<std::size_t>(order[j])] * n - 1e-9)));
         for (int c = 0; c < copies && k < n; ++c) source[static_cast<std::size_t>(k++)] = order[j];
     }
 }

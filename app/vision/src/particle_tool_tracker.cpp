@@ -10,7 +10,9 @@ namespace endotower::vision {
 
 struct ParticleToolTracker::Work {
     explicit Work(const ParticleToolTrackerParams& p)
-        : filter({.particles = p.particles, .lambda = p.lambda, .sorted_resampling = p.sorted_resampling}),
+        : filter({.particles = p.particles,
+                  .lambda = p.lambda,
+                  .sorted_resampling = p.sorted_resampling}),
           mhi({.analysis_width = p.analysis_width}) {}
     detail::AnalysisFrame frame;
     detail::RegionDescriber region;
@@ -35,7 +37,8 @@ void ParticleToolTracker::configure(const hal::FrameFormat& format) {
     w.id = -1;
 }
 
-std::size_t ParticleToolTracker::track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) {
+std::size_t ParticleToolTracker::track(const hal::Frame& frame,
+                                       std::span<ToolEstimate, kMaxTools> out) {
     Work& w = *work_;
     if (!w.frame.load(frame)) return 0;
     w.filter.load(w.frame.small);
@@ -47,8 +50,8 @@ std::size_t ParticleToolTracker::track(const hal::Frame& frame, std::span<ToolEs
         int b[4];
         w.mhi.last_box(b);
         const double s = w.frame.scale;
-        box = cv::Rect(static_cast<int>(b[0] * s), static_cast<int>(b[1] * s), static_cast<int>(b[2] * s),
-                       static_cast<int>(b[3] * s));
+        box = cv::Rect(static_cast<int>(b[0] * s), static_cast<int>(b[1] * s),
+                       static_cast<int>(b[2] * s), static_cast<int>(b[3] * s));
         if (box.area() <= 0) return 0;
         w.filter.init(box);
         w.id = next_id_++;
@@ -65,7 +68,8 @@ std::size_t ParticleToolTracker::track(const hal::Frame& frame, std::span<ToolEs
     for (int y = box.y; y < box.y + box.height; ++y) {
         std::uint8_t* row = w.mask.ptr<std::uint8_t>(y);
         const std::uint8_t* lit = w.frame.lit.ptr<std::uint8_t>(y);
-        for (int x = box.x; x < box.x + box.width; ++x) row[x] = lit[x] && w.filter.is_target_colour(y, x) ? 255 : 0;
+        for (int x = box.x; x < box.x + box.width; ++x)
+            row[x] = lit[x] && w.filter.is_target_colour(y, x) ? 255 : 0;
     }
     detail::RegionShapeParams shape;
     shape.largest_component = true;

@@ -6,7 +6,8 @@
 
 namespace endotower::vision::detail {
 
-void AnalysisFrame::configure(const hal::FrameFormat& format, int analysis_width, int surround_margin_px) {
+void AnalysisFrame::configure(const hal::FrameFormat& format, int analysis_width,
+                              int surround_margin_px) {
     scale = std::min(1.0, static_cast<double>(analysis_width) / format.width);
     const int sw = std::max(1, static_cast<int>(std::lround(format.width * scale)));
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * scale)));
@@ -19,10 +20,15 @@ void AnalysisFrame::configure(const hal::FrameFormat& format, int analysis_width
 }
 
 bool AnalysisFrame::load(const hal::Frame& frame) {
-    if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || small.empty() || frame.data == nullptr) return false;
-    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
-    if (full.size() == small.size()) full.copyTo(small);
-    else cv::resize(full, small, small.size(), 0, 0, cv::INTER_AREA);
+    if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || small.empty() ||
+        frame.data == nullptr)
+        return false;
+    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
+                       frame.format.stride);
+    if (full.size() == small.size())
+        full.copyTo(small);
+    else
+        cv::resize(full, small, small.size(), 0, 0, cv::INTER_AREA);
     cv::cvtColor(small, gray, cv::COLOR_BGR2GRAY);
     // The lit field of view, shrunk by the margin: the scope's rim is no tool edge.
     cv::threshold(gray, lit, surround_level, 255, cv::THRESH_BINARY);
@@ -51,15 +57,16 @@ double AnalysisFrame::rim_distance(Point2 p) const {
 
 namespace {
 
-void fill_estimate(const AnalysisFrame& a, Point2 incision, Point2 head, Point2 tip, double width, const EdgePair& pair,
-                   int id, ToolEstimate& e) {
+void fill_estimate(const AnalysisFrame& a, Point2 incision, Point2 head, Point2 tip, double width,
+                   const EdgePair& pair, int id, ToolEstimate& e) {
     const double inv = 1.0 / a.scale;
     auto full = [inv](Point2 p) { return Point2{p.x * inv, p.y * inv}; };
     e.id = id;
     e.present = true;
     e.tip = full(tip);
     e.head = full(head);
-    e.axis_deg = std::atan2(incision.y - head.y, incision.x - head.x) * 180.0 / M_PI;  // tip -> incision
+    e.axis_deg =
+        std::atan2(incision.y - head.y, incision.x - head.x) * 180.0 / M_PI;  // tip -> incision
     e.width_px = width * inv;
     e.edges.found = true;
     e.edges.e1 = {full(pair.e1.a), full(pair.e1.b)};
@@ -89,7 +96,8 @@ void describe_pair(const AnalysisFrame& a, const EdgePair& pair, int id, double 
     const TipResult tip = extract_tip(a.small_frame(), pair, {ux, uy}, a.fov, tp);
     fill_estimate(a, incision, head, tip.found ? tip.tip : head, pair.width_px, pair, id, e);
     const double cover = std::min(pair.e1.length(), pair.e2.length()) / (0.25 * a.small.cols);
-    e.confidence = std::clamp(0.25 + 0.5 * std::min(cover, 1.0) + (tip.found ? 0.25 : 0.0), 0.0, 1.0);
+    e.confidence =
+        std::clamp(0.25 + 0.5 * std::min(cover, 1.0) + (tip.found ? 0.25 : 0.0), 0.0, 1.0);
 }
 
 void RegionDescriber::configure(int width, int height) {
@@ -106,7 +114,9 @@ bool RegionDescriber::describe(const AnalysisFrame& a, const cv::Mat& mask, cv::
         const int n = cv::connectedComponentsWithStats(sub, labels_, stats_, centroids_, 8, CV_32S);
         int best = 0;
         for (int i = 1; i < n; ++i)
-            if (best == 0 || stats_.at<int>(i, cv::CC_STAT_AREA) > stats_.at<int>(best, cv::CC_STAT_AREA)) best = i;
+            if (best == 0 ||
+                stats_.at<int>(i, cv::CC_STAT_AREA) > stats_.at<int>(best, cv::CC_STAT_AREA))
+                best = i;
         if (best == 0) return false;
         cv::compare(labels_, best, component_, cv::CMP_EQ);
         sub = component_;
@@ -123,14 +133,17 @@ bool RegionDescriber::describe(const AnalysisFrame& a, const cv::Mat& mask, cv::
     for (int y = 0; y < sub.rows; ++y) {
         const std::uint8_t* row = sub.ptr<std::uint8_t>(y);
         for (int x = 0; x < sub.cols; ++x)
-            if (row[x]) ++histogram_[static_cast<std::size_t>(half + std::lround((x - cx) * dx + (y - cy) * dy))];
+            if (row[x])
+                ++histogram_[static_cast<std::size_t>(half +
+                                                      std::lround((x - cx) * dx + (y - cy) * dy))];
     }
     const auto area = static_cast<long>(m.m00);
     auto quantile = [&](double q) {
         long seen = 0;
         const long target = static_cast<long>(q * static_cast<double>(area));
         for (std::size_t i = 0; i < histogram_.size(); ++i)
-            if ((seen += histogram_[i]) > target) return static_cast<double>(static_cast<int>(i) - half);
+            if ((seen += histogram_[i]) > target)
+                return static_cast<double>(static_cast<int>(i) - half);
         return static_cast<double>(static_cast<int>(histogram_.size()) - 1 - half);
     };
     const double t_lo = quantile(0.005), t_hi = quantile(0.995);
@@ -142,7 +155,8 @@ bool RegionDescriber::describe(const AnalysisFrame& a, const cv::Mat& mask, cv::
     const Point2 end_lo{roi.x + cx + t_lo * dx, roi.y + cy + t_lo * dy};
     const Point2 end_hi{roi.x + cx + t_hi * dx, roi.y + cy + t_hi * dy};
     bool lo_is_incision = a.rim_distance(end_lo) <= a.rim_distance(end_hi);
-    if (std::isfinite(params.tip_direction_deg) && std::abs(a.rim_distance(end_lo) - a.rim_distance(end_hi)) < width) {
+    if (std::isfinite(params.tip_direction_deg) &&
+        std::abs(a.rim_distance(end_lo) - a.rim_distance(end_hi)) < width) {
         const double r = params.tip_direction_deg * M_PI / 180.0;
         lo_is_incision = std::cos(r) * dx + std::sin(r) * dy >= 0;  // +d points along the motion
     }
@@ -164,7 +178,8 @@ bool RegionDescriber::describe(const AnalysisFrame& a, const cv::Mat& mask, cv::
             }
         }
     }
-    const Point2 tip = n > 0 ? Point2{roi.x + sx / n, roi.y + sy / n} : (lo_is_incision ? end_hi : end_lo);
+    const Point2 tip =
+        n > 0 ? Point2{roi.x + sx / n, roi.y + sy / n} : (lo_is_incision ? end_hi : end_lo);
     const double ux = sign * dx, uy = sign * dy;
     const double head_back = std::min(params.head_widths * width, 0.5 * length);
     const Point2 head{tip.x - head_back * ux, tip.y - head_back * uy};

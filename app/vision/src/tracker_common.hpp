@@ -52,8 +52,8 @@ class RegionDescriber {
 public:
     void configure(int width, int height);
     // `mask` (CV_8UC1, analysis size) non-zero on the tool, only inside `roi`.
-    bool describe(const AnalysisFrame& a, const cv::Mat& mask, cv::Rect roi, const RegionShapeParams& params,
-                  int id, ToolEstimate& out);
+    bool describe(const AnalysisFrame& a, const cv::Mat& mask, cv::Rect roi,
+                  const RegionShapeParams& params, int id, ToolEstimate& out);
 
 private:
     std::vector<int> histogram_;

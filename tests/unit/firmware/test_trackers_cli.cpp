@@ -18,15 +18,18 @@ namespace {
 
 class TrackersCli : public ::testing::Test {
 protected:
-    static fs::path dir() { return fs::temp_directory_path() / ("endotower_trackers_" + std::to_string(::getpid())); }
+    static fs::path dir() {
+        return fs::temp_directory_path() / ("endotower_trackers_" + std::to_string(::getpid()));
+    }
     static void SetUpTestSuite() {
         fs::create_directories(dir());
         // A still grasper, 8 frames: a box tracker must keep the truth's tip exactly.
-        std::ofstream(dir() / "still.yaml") << "name: still\nframes: 8\nseed: 3\nlight: 0.8\ntools:\n"
-                                               "  - {diameter_mm: 5, tip: grasper, jaw: closed, pivot_mm: [85, -55, 15], "
-                                               "start: {tip_mm: [0, 4, 72]}}\n";
-        const auto r = run_endotower("scene --scenario " + (dir() / "still.yaml").string() + " --out " +
-                                     (dir() / "scene").string());
+        std::ofstream(dir() / "still.yaml")
+            << "name: still\nframes: 8\nseed: 3\nlight: 0.8\ntools:\n"
+               "  - {diameter_mm: 5, tip: grasper, jaw: closed, pivot_mm: [85, -55, 15], "
+               "start: {tip_mm: [0, 4, 72]}}\n";
+        const auto r = run_endotower("scene --scenario " + (dir() / "still.yaml").string() +
+                                     " --out " + (dir() / "scene").string());
         ASSERT_EQ(r.status, 0) << r.output;
     }
     static void TearDownTestSuite() { fs::remove_all(dir()); }
@@ -34,7 +37,8 @@ protected:
 
 TEST_F(TrackersCli, BaselineKeepsAStillToolsTipAndEvalScoresIt) {
     const std::string trace = (dir() / "kcf.jsonl").string();
-    auto r = run_endotower("baseline --tracker kcf --scene " + (dir() / "scene").string() + " --trace " + trace);
+    auto r = run_endotower("baseline --tracker kcf --scene " + (dir() / "scene").string() +
+                           " --trace " + trace);
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream t(trace), truth(dir() / "scene" / "truth.jsonl");
     std::string a, b;
@@ -49,16 +53,18 @@ TEST_F(TrackersCli, BaselineKeepsAStillToolsTipAndEvalScoresIt) {
         ++lines;
     }
     EXPECT_EQ(lines, 8);
-    r = run_endotower("eval --trace " + trace + " --truth " + (dir() / "scene" / "truth.jsonl").string() +
-                      " --min-success 100%");
+    r = run_endotower("eval --trace " + trace + " --truth " +
+                      (dir() / "scene" / "truth.jsonl").string() + " --min-success 100%");
     EXPECT_EQ(r.status, 0) << r.output;
 }
 
 TEST_F(TrackersCli, BaselineRefusesBadUsage) {
     auto r = run_endotower("baseline --tracker boosting --scene x --trace y");
     EXPECT_EQ(r.status, 2);
-    EXPECT_NE(r.output.find("--tracker is csrt or kcf, got 'boosting'"), std::string::npos) << r.output;
-    r = run_endotower("baseline --tracker csrt --scene /nonexistent --trace " + (dir() / "x.jsonl").string());
+    EXPECT_NE(r.output.find("--tracker is csrt or kcf, got 'boosting'"), std::string::npos)
+        << r.output;
+    r = run_endotower("baseline --tracker csrt --scene /nonexistent --trace " +
+                      (dir() / "x.jsonl").string());
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.output.find("/nonexistent/truth.jsonl"), std::string::npos) << r.output;
 }
@@ -68,8 +74,9 @@ TEST_F(TrackersCli, SimRunsEveryBookTrackerByName) {
         const fs::path board = dir() / (std::string(name) + ".yaml");
         std::ofstream(board) << "board: t\nanalysis: {stage: none, tracker: " << name << "}\n";
         const std::string trace = (dir() / (std::string(name) + ".jsonl")).string();
-        const auto r = run_endotower("sim --board " + board.string() + " --input " + (dir() / "scene" / "frames").string() +
-                                     " --trace " + trace + " --out " + (dir() / "o.mp4").string() + " --events ''");
+        const auto r = run_endotower("sim --board " + board.string() + " --input " +
+                                     (dir() / "scene" / "frames").string() + " --trace " + trace +
+                                     " --out " + (dir() / "o.mp4").string() + " --events ''");
         ASSERT_EQ(r.status, 0) << name << ": " << r.output;
         std::ifstream t(trace);
         std::string line;

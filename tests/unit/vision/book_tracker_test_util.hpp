@@ -20,9 +20,11 @@ inline cv::Mat tissue(int w, int h) {
     cv::Mat img(h, w, CV_8UC3);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            const double v = 18 * std::sin(x * 0.021 + 0.3 * std::sin(y * 0.017)) * std::cos(y * 0.013);
-            img.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(85 + v), cv::saturate_cast<uchar>(75 + v),
-                                                cv::saturate_cast<uchar>(185 + v));
+            const double v =
+                18 * std::sin(x * 0.021 + 0.3 * std::sin(y * 0.017)) * std::cos(y * 0.013);
+            img.at<cv::Vec3b>(y, x) =
+                cv::Vec3b(cv::saturate_cast<uchar>(85 + v), cv::saturate_cast<uchar>(75 + v),
+                          cv::saturate_cast<uchar>(185 + v));
         }
     return img;
 }

@@ -30,8 +30,12 @@ void* counted_new(std::size_t n) {
 }  // namespace
 
 namespace endotower::vision::test {
-long heap_allocations() { return g_new_count.load(); }
-long c_allocations() { return g_count.load(); }
+long heap_allocations() {
+    return g_new_count.load();
+}
+long c_allocations() {
+    return g_count.load();
+}
 void set_counting(bool on) {
     if (on) g_count = g_new_count = 0;
     g_on = on;
@@ -68,9 +72,21 @@ void* memalign(std::size_t align, std::size_t n) {
 }
 }
 
-void* operator new(std::size_t n) { return counted_new(n); }
-void* operator new[](std::size_t n) { return counted_new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void* operator new(std::size_t n) {
+    return counted_new(n);
+}
+void* operator new[](std::size_t n) {
+    return counted_new(n);
+}
+void operator delete(void* p) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+    std::free(p);
+}

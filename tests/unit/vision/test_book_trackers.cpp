@@ -11,13 +11,13 @@
 #include <string>
 
 #include "book_tracker_test_util.hpp"
-#include "endotower/vision/line2.hpp"
 #include "endotower/vision/ekf_tool_tracker.hpp"
 #include "endotower/vision/hybrid_tool_tracker.hpp"
+#include "endotower/vision/line2.hpp"
 #include "endotower/vision/mhi_tool_tracker.hpp"
+#include "endotower/vision/mog2_tool_tracker.hpp"
 #include "endotower/vision/particle_resampling.hpp"
 #include "endotower/vision/particle_tool_tracker.hpp"
-#include "endotower/vision/mog2_tool_tracker.hpp"
 #include "endotower/vision/tool_tracker_factory.hpp"
 
 namespace endotower::vision {
@@ -67,10 +67,11 @@ Errors run(ToolTracker& tracker, Truth truth_of, int frames, int skip, int w = 1
         e.one_id = e.one_id && out[0].id == id;
         e.worst_tip = std::max(e.worst_tip, test::tip_error(out[0], truth));
         e.worst_axis = std::max(e.worst_axis, test::axis_error_deg(out[0], truth));
-        e.worst_across = std::max(e.worst_across, distance_to_line(out[0].tip, {truth.entry, truth.tip}));
+        e.worst_across =
+            std::max(e.worst_across, distance_to_line(out[0].tip, {truth.entry, truth.tip}));
         if (std::getenv("TRACE_ERRORS"))
-            std::printf("%d tip %.0f,%.0f truth %.0f,%.0f axis %.1f truth %.1f\n", t, out[0].tip.x, out[0].tip.y,
-                        truth.tip.x, truth.tip.y, out[0].axis_deg, truth.axis_deg());
+            std::printf("%d tip %.0f,%.0f truth %.0f,%.0f axis %.1f truth %.1f\n", t, out[0].tip.x,
+                        out[0].tip.y, truth.tip.x, truth.tip.y, out[0].axis_deg, truth.axis_deg());
     }
     return e;
 }
@@ -88,13 +89,16 @@ long allocations_per_frame(ToolTracker& tracker, int warm, int frames, int w = 6
     }
     tracker.configure({w, h, w * 3, hal::PixelFormat::kBgr24});
     std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
-    for (int t = 0; t < warm; ++t) tracker.track(test::frame_of(imgs[static_cast<std::size_t>(t)]), out);
+    for (int t = 0; t < warm; ++t)
+        tracker.track(test::frame_of(imgs[static_cast<std::size_t>(t)]), out);
     test::set_counting(true);
-    for (int t = warm; t < warm + frames; ++t) tracker.track(test::frame_of(imgs[static_cast<std::size_t>(t)]), out);
+    for (int t = warm; t < warm + frames; ++t)
+        tracker.track(test::frame_of(imgs[static_cast<std::size_t>(t)]), out);
     test::set_counting(false);
     // OpenCV's own scratch buffers (Canny, filters) are not ours to remove; shown for the record.
     std::printf("%s: %ld operator new, %ld C allocations (OpenCV internals) in %d frames\n",
-                std::string(tracker.name()).c_str(), test::heap_allocations(), test::c_allocations(), frames);
+                std::string(tracker.name()).c_str(), test::heap_allocations(),
+                test::c_allocations(), frames);
     return test::heap_allocations();
 }
 
@@ -115,7 +119,8 @@ std::size_t track_still(ToolTracker& tracker, const cv::Scalar& colour, int fram
 
 TEST(EkfToolTracker, FollowsASweepingShaft) {
     EkfToolTracker tracker;
-    const Errors e = run(tracker, [](int t) { return sweeping(t); }, 40, 0);
+    const Errors e = run(
+        tracker, [](int t) { return sweeping(t); }, 40, 0);
     EXPECT_EQ(e.found, 40);
     EXPECT_TRUE(e.one_id);
     // The shaft is 45 px wide; the book's rule allows 2 widths. Exact frames: 12 px, 2 degrees.
@@ -125,7 +130,8 @@ TEST(EkfToolTracker, FollowsASweepingShaft) {
 
 TEST(EkfToolTracker, FollowsAVerticalShaft) {
     EkfToolTracker tracker;
-    const Errors e = run(tracker, [](int t) { return vertical(t); }, 30, 0);
+    const Errors e = run(
+        tracker, [](int t) { return vertical(t); }, 30, 0);
     EXPECT_EQ(e.found, 30);
     EXPECT_TRUE(e.one_id);
     EXPECT_LT(e.worst_tip, 12.0);
@@ -148,7 +154,9 @@ TEST(EkfToolTracker, AllocationsOnlyInsideOpenCV) {
 }
 
 // Tissue alone for 10 frames (the background is learned), then the sweeping shaft.
-ShaftTruth enters_after_10(int t) { return t < 10 ? ShaftTruth{} : sweeping(t - 10); }
+ShaftTruth enters_after_10(int t) {
+    return t < 10 ? ShaftTruth{} : sweeping(t - 10);
+}
 
 // ---- mog2
 
@@ -190,7 +198,8 @@ TEST(MhiToolTracker, NoToolWithoutMotion) {
     EXPECT_EQ(track_still(tracker, cv::Scalar(85, 75, 185), 10), 0u);
     EXPECT_EQ(track_still(tracker, cv::Scalar(0, 0, 0), 5), 0u);
     // A shaft held still: no motion, no tool.
-    const Errors e = run(tracker, [](int) { return sweeping(5); }, 10, 0);
+    const Errors e = run(
+        tracker, [](int) { return sweeping(5); }, 10, 0);
     EXPECT_EQ(e.found, 0);
 }
 
@@ -262,7 +271,8 @@ TEST(HybridToolTracker, FollowsAMovingShaftWithEdgesAndTip) {
 TEST(ParticleAndHybrid, NoToolOnStillTissueOrBlack) {
     ParticleToolTracker particle;
     HybridToolTracker hybrid;
-    for (ToolTracker* t : {static_cast<ToolTracker*>(&particle), static_cast<ToolTracker*>(&hybrid)}) {
+    for (ToolTracker* t :
+         {static_cast<ToolTracker*>(&particle), static_cast<ToolTracker*>(&hybrid)}) {
         EXPECT_EQ(track_still(*t, cv::Scalar(85, 75, 185), 10), 0u) << t->name();
         EXPECT_EQ(track_still(*t, cv::Scalar(0, 0, 0), 5), 0u) << t->name();
     }

@@ -12,7 +12,8 @@
 namespace endotower::vision {
 
 double effective_sample_size(std::span<const double> weights);
-void sorted_resampling(std::span<const double> weights, std::span<int> order, std::span<int> source);
+void sorted_resampling(std::span<const double> weights, std::span<int> order,
+                       std::span<int> source);
 void systematic_resampling(std::span<const double> weights, double u, std::span<int> source);
 
 }  // namespace endotower::vision

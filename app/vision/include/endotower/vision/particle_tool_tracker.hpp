@@ -32,7 +32,9 @@ class ParticleToolTracker final : public ToolTracker {
 public:
     explicit ParticleToolTracker(ParticleToolTrackerParams params = {});
     ~ParticleToolTracker() override;
-    std::string_view name() const override { return params_.sorted_resampling ? "particle_sorted" : "particle"; }
+    std::string_view name() const override {
+        return params_.sorted_resampling ? "particle_sorted" : "particle";
+    }
     void configure(const hal::FrameFormat& format) override;
     std::size_t track(const hal::Frame& frame, std::span<ToolEstimate, kMaxTools> out) override;
 
