@@ -2,13 +2,15 @@
 # Every tracker on the table 4.1 simulator suites and on ../shared/data/sznitman_lap
 # with `endotower eval` (docs/tracking.md, "Comparison"): success and the median
 # analysis time per frame (the trace's stages_us.analysis; stage none, so only the
-# tracker). csrt and kcf: OpenCV's trackers from the truth's box (endotower baseline). Usage: toolchain/compare-trackers.sh [BUILD_DIR] [WORK_DIR] [TRACKER ...]
+# tracker; SUITES=... picks suites, REAL=0 skips the real clip). csrt and kcf:
+# OpenCV's trackers from the truth's box (endotower baseline).
+# Usage: toolchain/compare-trackers.sh [BUILD_DIR] [WORK_DIR] [TRACKER ...]
 set -eu
 B=${1:-build/release}/firmware/endotower
 W=${2:-/tmp/compare-trackers}
 shift 2 2>/dev/null || shift $#
 TRACKERS=${*:-likelihood kalman kalman_red ekf mog2 mhi particle particle_sorted hybrid csrt kcf}
-SUITES="t41_speed_0_4 t41_speed_4_8 t41_speed_8_up t41_light_0_30 t41_light_30_45 t41_light_46_100 t41_distractors two_tools_crossing tool_leaves"
+SUITES=${SUITES:-"t41_speed_0_4 t41_speed_4_8 t41_speed_8_up t41_light_0_30 t41_light_30_45 t41_light_46_100 t41_distractors two_tools_crossing tool_leaves"}
 mkdir -p "$W"
 for s in $SUITES; do
     [ -f "$W/$s/truth.jsonl" ] || "$B" scene --scenario "board/sim/scenarios/$s.yaml" --out "$W/$s" >/dev/null
@@ -58,7 +60,7 @@ for t in $TRACKERS; do
         echo
     done
     # The real clip has head annotations only, no box to start CSRT/KCF from.
-    if [ -d ../shared/data/sznitman_lap/frames ] && [ "$t" != csrt ] && [ "$t" != kcf ]; then
+    if [ "${REAL:-1}" = 1 ] && [ -d ../shared/data/sznitman_lap/frames ] && [ "$t" != csrt ] && [ "$t" != kcf ]; then
         "$B" sim --board "$W/$t.yaml" --input ../shared/data/sznitman_lap/frames --trace "$W/$t-sz.jsonl" --out "$W/$t-sz.mp4" --events '' >/dev/null
         printf '%s sznitman_lap %s ms ' "$t" "$(median_ms "$W/$t-sz.jsonl")"
         "$B" eval --trace "$W/$t-sz.jsonl" --sznitman ../shared/data/sznitman_lap/train.xml | grep -iE 'success' | tr '\n' ' '
