@@ -10,8 +10,9 @@
 // spacing so both edges cannot take one peak); the window's peak is the edge when it
 // has `min_votes_fraction` (0.06) x the analysis width votes. Polar lines have no
 // slope singularity: a vertical tool is tracked like any other.
-// Initialisation and re-initialisation after `max_missed` (5) frames without both
-// edges: Canny + probabilistic Hough + EdgePairing, as the midline tracker. The edges'
+// Initialisation, and re-initialisation once more than `max_missed` (0) frames in a
+// row lack both edges (in that same frame): Canny + probabilistic Hough +
+// EdgePairing, as the midline tracker. 0 measured best (docs/tracking.md). The edges'
 // extent is the longest run of edge pixels along each line (gaps up to 10 px); the tip
 // along the midline with TipExtractor (describe: tip, head, axis in full resolution).
 // One tool (the book's EKF tracks one). Buffers sized in configure(); nothing is
@@ -31,7 +32,7 @@ struct EkfToolTrackerParams {
     double window_theta_deg = 4.0, theta_step_deg = 0.5;
     double window_rho_px = 12.0;
     double min_votes_fraction = 0.06;
-    int max_missed = 5;
+    int max_missed = 0;
     double process_noise_xy = 4.0, process_noise_uv = 1.0, process_noise_w = 1e-4;
     double process_noise_theta = 1e-4, process_noise_rho = 4.0;
     double measurement_noise_theta = 1e-4, measurement_noise_rho = 1.0;
