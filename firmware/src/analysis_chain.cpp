@@ -17,6 +17,7 @@
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/strip_marker_stage.hpp"
+#include "endotower/vision/tool_tracker_factory.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
 
 namespace endotower::firmware {
@@ -28,6 +29,7 @@ struct AnalysisChain::Parts {
     std::optional<vision::KalmanToolTracker> kalman;
     vision::ToolLikelihood tool_model;
     std::optional<vision::LikelihoodToolTracker> likelihood;
+    std::unique_ptr<vision::ToolTracker> book_tracker;  // ekf, mog2, particle, ... (by name)
     std::optional<vision::ToolTrackingStage> tracking;
     calibration::Calibration cal;
     std::optional<calibration::CalibrationStage> calibration_stage;
@@ -153,7 +155,9 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
         return false;
     }
     p.likelihood.emplace(p.tool_model);
-    vision::ToolTracker& tracker = board.tracker == "likelihood"
+    p.book_tracker = vision::make_book_tracker(board.tracker);
+    vision::ToolTracker& tracker = p.book_tracker ? *p.book_tracker
+                                   : board.tracker == "likelihood"
                                        ? static_cast<vision::ToolTracker&>(*p.likelihood)
                                        : *p.kalman;
     p.tracking.emplace(tracker);

@@ -20,7 +20,7 @@ struct BoardConfig {
 
     // analysis
     std::string stage = "status_badge";  // "status_badge" | "none"
-    std::string tracker = "none";        // "none" | "kalman" | "kalman_red" | "likelihood"
+    std::string tracker = "none";        // "none" | "kalman" | "kalman_red" | "likelihood" | vision::book_tracker_names()
     std::string tool_model;              // the likelihood tracker's model file
     double tool_diameter_mm = 5;         // shaft diameter for the 3-D pose (with a calibration)
     double analysis_timeout_ms = 0.0;

@@ -22,5 +22,6 @@ int run_calibrate_command(const Args& args);
 int run_train_gestures_command(const Args& args);
 int run_run_command(const Args& args);
 int run_selftest_command(const Args& args);
+int run_baseline_command(const Args& args);
 
 }  // namespace endotower::firmware

@@ -30,6 +30,7 @@ constexpr Command kCommands[] = {
     {"train-gestures", run_train_gestures_command, "train the tool-gesture classifier from labelled recordings"},
     {"run", run_run_command, "the appliance: capture device to monitor, from the board file"},
     {"selftest", run_selftest_command, "check camera, handle, display, latency, files; write a report"},
+    {"baseline", run_baseline_command, "OpenCV's CSRT/KCF on a scene from the truth's box, for comparison"},
 };
 
 void print_help() {

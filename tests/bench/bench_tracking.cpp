@@ -7,10 +7,13 @@
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
+#include "endotower/vision/tool_tracker_factory.hpp"
 
 namespace {
 
@@ -99,6 +102,20 @@ void BM_LikelihoodTracker1080p(benchmark::State& state) {
     time_tracking(state, tracker, frames, fmt);
 }
 BENCHMARK(BM_LikelihoodTracker1080p)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+
+// The book's further trackers (ekf, mog2, particle, particle_sorted, hybrid, mhi) by
+// name, on the moving-shaft frames of the Kalman benchmark (motion for mog2/mhi).
+void BM_BookTracker1080p(benchmark::State& state) {
+    const std::string_view name = vision::book_tracker_names()[static_cast<std::size_t>(state.range(0))];
+    state.SetLabel(std::string(name));
+    const std::unique_ptr<vision::ToolTracker> tracker = vision::make_book_tracker(name);
+    const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
+    tracker->configure(fmt);
+    std::vector<cv::Mat> frames;
+    for (int t = 0; t < 20; ++t) frames.push_back(frame_1080p(t));
+    time_tracking(state, *tracker, frames, fmt);
+}
+BENCHMARK(BM_BookTracker1080p)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 }  // namespace
 

@@ -153,7 +153,8 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\nanalysis:\n  stage: magic\n",
          "3: field 'analysis.stage': unknown stage 'magic' (expected status_badge or none)"},
         {"board: t\nanalysis:\n  tracker: cnn\n",
-         "3: field 'analysis.tracker': unknown tracker 'cnn' (expected none, kalman, kalman_red or likelihood)"},
+         "3: field 'analysis.tracker': unknown tracker 'cnn' (expected none, kalman, kalman_red, likelihood, ekf, mog2, "
+         "particle, particle_sorted, hybrid, mhi)"},
         {"board: t\nsim:\n  realtime: maybe\n", "3: field 'sim.realtime': expected true or false, got 'maybe'"},
         {"board: t\nanalysis:\n  max_overlay_age: 2.5\n", "3: field 'analysis.max_overlay_age': expected an integer"},
         {"video: {latency_ms: 1}\n", "1: field 'board': missing (the board's name)"},
@@ -200,10 +201,22 @@ TEST(Board, FuzzRegressionsAreRefusedCleanly) {
     for (const auto& e : fs::directory_iterator(dir)) {
         BoardConfig b;
         std::string err;
-        if (!load_board(e.path().string(), b, err)) EXPECT_EQ(err.rfind(e.path().string(), 0), 0u) << err;
+        if (!load_board(e.path().string(), b, err)) {
+            EXPECT_EQ(err.rfind(e.path().string(), 0), 0u) << err;
+        }
         ++n;
     }
     EXPECT_GE(n, 1);
+}
+
+TEST(Board, TheBooksTrackersAreSelectableByName) {
+    for (const char* name : {"ekf", "mog2", "particle", "particle_sorted", "hybrid", "mhi"}) {
+        const std::string p = write_board("trk.yaml", std::string("board: t\nanalysis: {tracker: ") + name + "}\n");
+        BoardConfig b;
+        std::string err;
+        EXPECT_TRUE(load_board(p, b, err)) << err;
+        EXPECT_EQ(b.tracker, name);
+    }
 }
 
 TEST(Board, MissingAndEmptyFiles) {

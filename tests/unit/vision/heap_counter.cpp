@@ -1,0 +1,92 @@
+// Counts heap allocations of the whole process, separately: operator new (C++
+// allocations, the project's rule) and the C allocator (OpenCV's internal buffers
+// come from posix_memalign), by replacing operator new and interposing glibc's malloc
+// family over its __libc_ entry points. Only linked into test_book_trackers.
+#include <atomic>
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+
+#include "book_tracker_test_util.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+}
+
+namespace {
+std::atomic<long> g_count{0}, g_new_count{0};
+std::atomic<bool> g_on{false};
+void note() {
+    if (g_on.load(std::memory_order_relaxed)) g_count.fetch_add(1, std::memory_order_relaxed);
+}
+void* counted_new(std::size_t n) {
+    if (g_on.load(std::memory_order_relaxed)) g_new_count.fetch_add(1, std::memory_order_relaxed);
+    if (void* p = __libc_malloc(n == 0 ? 1 : n)) return p;
+    throw std::bad_alloc();
+}
+}  // namespace
+
+namespace endotower::vision::test {
+long heap_allocations() {
+    return g_new_count.load();
+}
+long c_allocations() {
+    return g_count.load();
+}
+void set_counting(bool on) {
+    if (on) g_count = g_new_count = 0;
+    g_on = on;
+}
+}  // namespace endotower::vision::test
+
+extern "C" {
+void* malloc(std::size_t n) {
+    note();
+    return __libc_malloc(n);
+}
+void* calloc(std::size_t a, std::size_t b) {
+    note();
+    return __libc_calloc(a, b);
+}
+void* realloc(void* p, std::size_t n) {
+    note();
+    return __libc_realloc(p, n);
+}
+int posix_memalign(void** out, std::size_t align, std::size_t n) {
+    note();
+    void* p = __libc_memalign(align, n);
+    if (!p) return 12;  // ENOMEM
+    *out = p;
+    return 0;
+}
+void* aligned_alloc(std::size_t align, std::size_t n) {
+    note();
+    return __libc_memalign(align, n);
+}
+void* memalign(std::size_t align, std::size_t n) {
+    note();
+    return __libc_memalign(align, n);
+}
+}
+
+void* operator new(std::size_t n) {
+    return counted_new(n);
+}
+void* operator new[](std::size_t n) {
+    return counted_new(n);
+}
+void operator delete(void* p) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+    std::free(p);
+}
