@@ -18,6 +18,9 @@ packages=(
   # display driver (issue 9): DRM/KMS, GBM, EGL, GLES2; Mesa's llvmpipe for the headless
   # overlay test and for vkms in the guest
   libdrm-dev libgbm-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
+  # reliability (issue 10): clang-tidy (toolchain/tidy.sh), strace (the no-network test),
+  # systemd-analyze (the unit's security score, docs/reliability.md)
+  clang-tidy strace systemd
 )
 
 missing=()
