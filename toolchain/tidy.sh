@@ -16,6 +16,12 @@ else
   # The project's own translation units (not build/, not third-party).
   mapfile -t files < <(git ls-files 'app/*.cpp' 'drivers/*.cpp' 'firmware/*.cpp' 'hal/*.cpp' 'tests/*.cpp')
 fi
-run-clang-tidy -quiet -p "$db" -j "$(nproc)" "${files[@]/#/$root/}" 2>&1 |
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+status=0
+run-clang-tidy -quiet -p "$db" -j "$(nproc)" "${files[@]/#/$root/}" >"$log" 2>&1 || status=$?
+# Only the findings (no colour codes, no per-file chatter).
+sed 's/\x1b\[[0-9;]*m//g' "$log" |
   grep -v -E "^([0-9]+ warnings? generated|Suppressed [0-9]+ warnings|Use -header-filter|clang-tidy-[0-9]+ |Running clang-tidy)" || true
-test "${PIPESTATUS[0]}" -eq 0
+if grep -q -E "(warning|error): " "$log"; then status=1; fi
+exit "$status"
