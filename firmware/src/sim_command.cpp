@@ -322,7 +322,7 @@ int run_sim_command(const Args& args) {
         }
     }
     if (gestures) chain.add(&gesture_stage);
-    if (!a.regions.empty() || marks.size() > 0) chain.add(&regions);
+    if (!a.regions.empty() || !marks.empty()) chain.add(&regions);
     app::AnalysisStage* stage = chain.size() == 0 ? nullptr : &chain;
 
     app::PipelineConfig cfg;
