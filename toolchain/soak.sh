@@ -37,7 +37,7 @@ while kill -0 "$pid" 2>/dev/null; do
   rss=$(awk '/^VmRSS/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
   thr=$(awk '/^Threads/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
   fds=$(ls "/proc/$pid/fd" 2>/dev/null | wc -l)
-  frames=$(cat "$out/trace.jsonl.tmp" 2>/dev/null | wc -l)
+  frames=$( (cat "$out/trace.jsonl.tmp" 2>/dev/null || true) | wc -l)
   [ -n "$rss" ] && echo "$(( $(date +%s) - start )),$frames,$rss,$fds,$thr" >>"$out/samples.csv"
   sleep 5
 done
