@@ -19,9 +19,11 @@ cmake --build build/release --target endotower -j "$(nproc)" >/dev/null
 bin=build/release/firmware/endotower
 out=build/soak
 rm -rf "$out" && mkdir -p "$out" && : >"$out/events.txt"
+# The sim board at 60 fps (sim.fps), its models by absolute path.
+sed -e "s|models/|$root/board/sim/models/|" -e "s|^  realtime: .*|&\n  fps: 60|" board/sim/board.yaml >"$out/board.yaml"
 
 # Frames in one pass of the input (the trace of a one-pass run has one line per frame).
-"$bin" sim --board board/sim/board.yaml --input "$input" --events "$out/events.txt" --out "" \
+"$bin" sim --board "$out/board.yaml" --input "$input" --events "$out/events.txt" --out "" \
   --frames "$out/pass" --trace "$out/pass.jsonl" >/dev/null
 per_pass=$(wc -l <"$out/pass.jsonl")
 rm -rf "$out/pass"
@@ -29,7 +31,7 @@ loops=$(( (minutes * 60 * 60 + per_pass - 1) / per_pass ))
 echo "soak: $minutes min of 1080p60 = $loops passes of $per_pass frames of $input"
 
 start=$(date +%s)
-"$bin" sim --board board/sim/board.yaml --input "$input" --events "$out/events.txt" --out "" --loop "$loops" \
+"$bin" sim --board "$out/board.yaml" --input "$input" --events "$out/events.txt" --out "" --loop "$loops" \
   --region "800,400 1100,400 1100,650 800,650" --trace "$out/trace.jsonl" >"$out/sim.txt" 2>&1 &
 pid=$!
 echo "wall_s,video_frames,rss_kb,fds,threads" >"$out/samples.csv"
