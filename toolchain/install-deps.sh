@@ -20,6 +20,9 @@ packages=(
   libdrm-dev libgbm-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri
   # overlay renderer (issue 8): FreeType and the DejaVu font for text; DCMTK for DICOM
   libfreetype-dev fonts-dejavu-core libdcmtk-dev
+  # reliability (issue 10): clang-tidy (toolchain/tidy.sh), strace (the no-network test),
+  # systemd-analyze (the unit's security score, docs/reliability.md)
+  clang-tidy strace systemd
 )
 
 missing=()

@@ -129,7 +129,7 @@ bool Pipeline::Impl::start() {
         log.printf(LogLevel::kWarning,
                    "latency of %.1f ms needs %lld capture buffers, the source has %d: "
                    "frames will be dropped at capture",
-                   static_cast<double>(cfg.latency_ns) / 1e6, static_cast<long long>(window + 1),
+                   static_cast<double>(cfg.latency_ns) / 1e6, static_cast<long long>(window) + 1,
                    source.buffer_count());
     if (!sink.configure(source.format())) {
         summary.ok = false;

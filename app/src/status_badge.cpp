@@ -1,6 +1,7 @@
 #include "endotower/app/status_badge.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
@@ -106,7 +107,7 @@ void StatusBadge::process(AnalysisContext& ctx) {
     }
     double light = 0, clipped = 0;
     measure(ctx.frame, step_, light, clipped);
-    const int percent = static_cast<int>(light * 100.0 + 0.5);
+    const int percent = static_cast<int>(std::lround(light * 100.0));
     const char* band = percent < 30 ? "0-30" : percent <= 45 ? "30-45" : "46-100";
 
     char text[48];

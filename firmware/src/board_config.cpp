@@ -58,6 +58,24 @@ struct Reader {
         return true;
     }
 
+    // A file the appliance reads (media, calibration, model; issue 10): a relative path
+    // must stay inside the board file's directory, through ".." and symlinks alike, so
+    // a hostile board cannot reach "../../etc/..."; an absolute path is the installer's
+    // explicit choice (the service sees a read-only system, endotower.service).
+    bool confined(const YAML::Node& map, const char* key, const std::string& field,
+                  std::string& out) {
+        if (!text(map, key, field, out)) return false;
+        if (out.empty() || fs::path(out).is_absolute()) return true;
+        std::error_code ec;
+        const fs::path base = fs::weakly_canonical(fs::absolute(file, ec).parent_path(), ec);
+        const fs::path target = fs::weakly_canonical(base / out, ec);
+        const fs::path rel = target.lexically_relative(base);
+        if (!ec && !rel.empty() && *rel.begin() != "..") return true;
+        return fail(map[key], field,
+                    "'" + out + "' leads out of the board file's directory " + base.string() +
+                        " (relative paths must stay inside it; give an absolute path instead)");
+    }
+
     bool number(const YAML::Node& map, const char* key, const std::string& field, double lo,
                 double hi, double& out) {
         const YAML::Node n = map[key];
@@ -222,7 +240,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     if (!r.text(root, "board", "board", c.name) ||
         !r.text(root, "description", "description", c.description))
         return false;
-    if (!r.text(root, "calibration", "calibration", c.calibration)) return false;
+    if (!r.confined(root, "calibration", "calibration", c.calibration)) return false;
     if (const YAML::Node v = root["video"]) {
         if (!r.keys(
                 v, "video",
@@ -243,7 +261,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
                      "fov_mask"}) ||
             !r.text(a, "stage", "analysis.stage", c.stage) ||
             !r.text(a, "tracker", "analysis.tracker", c.tracker) ||
-            !r.text(a, "tool_model", "analysis.tool_model", c.tool_model) ||
+            !r.confined(a, "tool_model", "analysis.tool_model", c.tool_model) ||
             !r.number(a, "tool_diameter_mm", "analysis.tool_diameter_mm", 1, 20,
                       c.tool_diameter_mm) ||
             !r.number(a, "timeout_ms", "analysis.timeout_ms", 0, 60000, c.analysis_timeout_ms) ||
@@ -273,7 +291,7 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
             if (!g.IsMap())
                 return r.fail(g, "analysis.gestures", "expected a map {model: FILE, hold_ms: N}");
             if (!r.keys(g, "analysis.gestures", {"model", "hold_ms"}) ||
-                !r.text(g, "model", "analysis.gestures.model", c.gesture_model) ||
+                !r.confined(g, "model", "analysis.gestures.model", c.gesture_model) ||
                 !r.number(g, "hold_ms", "analysis.gestures.hold_ms", 0, 60000, c.gesture_hold_ms))
                 return false;
             if (c.gesture_model.empty())
@@ -308,8 +326,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     if (const YAML::Node s = root["sim"]) {
         if (!r.keys(s, "sim",
                     {"input", "events", "output", "frames", "trace", "realtime", "fps"}) ||
-            !r.text(s, "input", "sim.input", c.sim_input) ||
-            !r.text(s, "events", "sim.events", c.sim_events) ||
+            !r.confined(s, "input", "sim.input", c.sim_input) ||
+            !r.confined(s, "events", "sim.events", c.sim_events) ||
             !r.text(s, "output", "sim.output", c.sim_output) ||
             !r.text(s, "frames", "sim.frames", c.sim_frames) ||
             !r.text(s, "trace", "sim.trace", c.sim_trace) ||
@@ -347,8 +365,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
                       c.sci_activation_hold_ms) ||
             !r.number(n, "cross_hold_ms", "sci.cross_hold_ms", 100, 60000, c.sci_cross_hold_ms) ||
             !r.number(n, "confirm_ms", "sci.confirm_ms", 100, 60000, c.sci_confirm_ms) ||
-            !r.text(n, "media", "sci.media", c.sci_media) ||
-            !r.text(n, "patient_record", "sci.patient_record", c.sci_patient_record))
+            !r.confined(n, "media", "sci.media", c.sci_media) ||
+            !r.confined(n, "patient_record", "sci.patient_record", c.sci_patient_record))
             return false;
         sci::SciLayout layout;
         if (!sci::parse_sci_layout(c.sci_layout, layout))

@@ -62,7 +62,7 @@ int run_scene_command(const Args& args) {
             k != "--size" && k != "--scale")
             return usage_error("unknown option '" + k + "'");
         if (i + 1 >= args.size()) return usage_error("option " + k + " needs a value");
-        const std::string v = args[++i];
+        const std::string& v = args[++i];
         unsigned long long n = 0;
         if (k == "--scenario") {
             o.scenario_path = v;

@@ -54,6 +54,7 @@ struct SimArgs {
     bool realtime = false, realtime_set = false;
     double latency_ms = -1.0;
     std::vector<std::string> regions;  // --region, in order (ids 0, 1, ...)
+    int loops = 1;  // --loop N: play the input video N times (toolchain/soak.sh)
 };
 
 int usage_error(const std::string& m) {
@@ -87,7 +88,8 @@ void print_sim_help() {
     std::printf(
         "usage: endotower sim [--board FILE] [--input FILE|DIR] [--events TIMELINE]\n"
         "                     [--out VIDEO] [--frames DIR] [--trace FILE] [--realtime]\n"
-        "                     [--latency-ms MS] [--region \"x1,y1 x2,y2 x3,y3 ...\"]...\n\n"
+        "                     [--latency-ms MS] [--region \"x1,y1 x2,y2 x3,y3 ...\"]...\n"
+        "                     [--loop N]\n\n"
         "Runs the appliance on a recording: every frame goes through the fixed-latency\n"
         "video path with the analysis overlay, into a video file and/or PNG frames, with\n"
         "a per-frame trace (JSON Lines, docs/trace.md). Prints a latency summary.\n\n"
@@ -102,7 +104,9 @@ void print_sim_help() {
         "  --latency-ms MS  capture-to-present latency (default: one frame period)\n"
         "  --region POLY    track a tissue region marked on the first frame (its pixels),\n"
         "                   repeatable (ids 0, 1, ...; the timeline's 'region' marks follow);\n"
-        "                   the board's analysis.regions sets the method (docs/regions.md)\n\n"
+        "                   the board's analysis.regions sets the method (docs/regions.md)\n"
+        "  --loop N         play the input video N times in a row, time running on (a soak,\n"
+        "                   toolchain/soak.sh); with only --trace, no video is written\n\n"
         "Command-line options override the board file. Exit status: 0 done, 1 failed\n"
         "while running, 2 bad usage or input.\n",
         ENDOTOWER_DEFAULT_BOARD);
@@ -124,7 +128,8 @@ int run_sim_command(const Args& args) {
         } else if (k == "--realtime") {
             a.realtime = a.realtime_set = true;
         } else if (k == "--board" || k == "--input" || k == "--events" || k == "--out" ||
-                   k == "--frames" || k == "--trace" || k == "--latency-ms" || k == "--region") {
+                   k == "--frames" || k == "--trace" || k == "--latency-ms" || k == "--region" ||
+                   k == "--loop") {
             std::string v;
             if (!value(v)) return usage_error("option " + k + " needs a value");
             if (k == "--board") a.board = v;
@@ -134,6 +139,13 @@ int run_sim_command(const Args& args) {
             else if (k == "--frames") a.frames = v;
             else if (k == "--trace") a.trace = v;
             else if (k == "--region") a.regions.push_back(v);
+            else if (k == "--loop") {
+                char* end = nullptr;
+                const long n = std::strtol(v.c_str(), &end, 10);
+                if (v.empty() || *end != 0 || n < 1 || n > 1000000)
+                    return usage_error("--loop needs a count in 1..1000000, got '" + v + "'");
+                a.loops = static_cast<int>(n);
+            }
             else if (!parse_ms(v, a.latency_ms))
                 return usage_error("--latency-ms needs a number of milliseconds in 0..1000, got '" + v + "'");
         } else {
@@ -156,7 +168,7 @@ int run_sim_command(const Args& args) {
     if (a.realtime_set) board.sim_realtime = a.realtime;
     if (a.latency_ms >= 0) board.latency_ms = a.latency_ms;
     if (board.sim_input.empty()) return usage_error("no input: give --input or set sim.input in " + a.board);
-    if (board.sim_output.empty() && board.sim_frames.empty())
+    if (board.sim_output.empty() && board.sim_frames.empty() && (a.loops == 1 || board.sim_trace.empty()))
         return usage_error("no output: give --out and/or --frames (or set sim.output)");
 
     std::vector<vision::RegionMark> marks;
@@ -193,7 +205,7 @@ int run_sim_command(const Args& args) {
     if (board.sim_realtime) clock = std::make_unique<system::MonotonicClock>();
     else clock = std::make_unique<sim::VirtualClock>();
 
-    sim::RecordedFrameSource source({board.sim_input, board.sim_fps, 6}, *clock);
+    sim::RecordedFrameSource source({board.sim_input, board.sim_fps, 6, a.loops}, *clock);
     if (!source.open()) {
         std::fprintf(stderr, "endotower sim: %s\n", source.error().c_str());
         return kExitBadInput;

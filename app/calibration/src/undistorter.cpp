@@ -101,6 +101,7 @@ int remap_run_sse2(const Undistorter::Impl&, const hal::Frame& in, const cv::Vec
         const std::uint32_t px = static_cast<std::uint32_t>(_mm_cvtsi128_si32(v));
         // A 4-byte store is one instruction; its extra byte (C == 3) lands on the next
         // pixel, written later, except at the row's end.
+        // NOLINTNEXTLINE(bugprone-branch-clone): the branches are the same only when C == 4
         if (C == 4 || x + 1 < w)
             std::memcpy(row + C * x, &px, 4);
         else

@@ -428,6 +428,8 @@ void SceneRenderer::Impl::render(int index, Image& image, FrameTruth& truth) {
         const float* p = src->ptr<float>(y);
         std::uint8_t* o = image.bgr.data() + static_cast<std::size_t>(y) * w * 3;
         for (int x = 0; x < 3 * w; ++x) {
+            // Per pixel: truncating x + 0.5 is the cheap rounding, and it is clamped.
+            // NOLINTNEXTLINE(bugprone-incorrect-roundings)
             int v = lut[std::clamp(static_cast<int>(p[x] * (kLut - 1) + 0.5f), 0, kLut - 1)];
             if (sigma > 0) {
                 if (left == 0) {

@@ -44,7 +44,7 @@ public:
 
     bool number(const YAML::Node& n, const std::string& field, double& out, double lo, double hi) {
         if (!n.IsScalar()) return fail(n, field, "expected a number");
-        const std::string s = n.Scalar();
+        const std::string& s = n.Scalar();
         char* end = nullptr;
         const double v = std::strtod(s.c_str(), &end);
         if (s.empty() || end == nullptr || *end != 0 || !std::isfinite(v))

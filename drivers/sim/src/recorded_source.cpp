@@ -62,6 +62,7 @@ struct RecordedFrameSource::Impl {
     Nanos period = period_from_fps(kDefaultFps);
     double fps = kDefaultFps;  // capture times come from it, so they do not drift
     Nanos t0 = 0;
+    int loops_done = 0;
     std::int64_t expected = 0;
     std::int64_t read = 0;
     std::int64_t skipped = 0;
@@ -253,6 +254,15 @@ struct RecordedFrameSource::Impl {
         } catch (const cv::Exception& e) {
             warning = "decoding " + opt.path + " failed: " + e.what();
         }
+        if (!ok && ++loops_done < opt.loops && next_video_index > 1) {
+            // Play it again from the start (a soak); the index runs on.
+            try {
+                cap.release();
+                ok = cap.open(opt.path, cv::CAP_FFMPEG) && cap.read(m) && !m.empty();
+            } catch (const cv::Exception& e) {
+                warning = "reopening " + opt.path + " failed: " + e.what();
+            }
+        }
         if (!ok) {
             pool.release(slot);
             end_video();
@@ -338,6 +348,7 @@ bool RecordedFrameSource::start() {
         return d.fail("recording " + d.opt.path + ": cannot allocate " + std::to_string(n) +
                       " frame buffers");
     d.t0 = d.clock.now();
+    d.loops_done = 0;
     d.started = true;
     return true;
 }

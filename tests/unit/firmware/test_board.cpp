@@ -318,3 +318,54 @@ TEST(BoardInput, ErrorsNameTheLineAndField) {
 
 }  // namespace
 }  // namespace endotower::firmware
+
+namespace endotower::firmware {
+namespace {
+
+// Issue 10: the files a board makes the appliance read may not lie outside the board
+// file's directory through a relative path, whether by ".." or by a symlink.
+TEST(BoardPaths, RelativePathsMayNotLeaveTheBoardDirectory) {
+    const fs::path dir = fs::temp_directory_path() / ("endotower_board_confine_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir / "boards" / "scopes");
+    fs::create_directory_symlink("/etc", dir / "boards" / "etc_link");
+    const std::string board = (dir / "boards" / "b.yaml").string();
+    const std::string base = fs::weakly_canonical(dir / "boards").string();
+    struct Case {
+        const char* yaml;
+        const char* field;
+        const char* value;
+        int line;
+    };
+    const Case refused[] = {
+        {"board: t\ncalibration: ../../etc/passwd\n", "calibration", "../../etc/passwd", 2},
+        {"board: t\ncalibration: scopes/../../x.json\n", "calibration", "scopes/../../x.json", 2},
+        {"board: t\ncalibration: etc_link/passwd\n", "calibration", "etc_link/passwd", 2},
+        {"board: t\nanalysis:\n  tool_model: ../m.bin\n", "analysis.tool_model", "../m.bin", 3},
+        {"board: t\nanalysis:\n  gestures: {model: ../../g.yml}\n", "analysis.gestures.model", "../../g.yml", 3},
+        {"board: t\nsim:\n  input: ../clip.mp4\n", "sim.input", "../clip.mp4", 3},
+        {"board: t\nsim:\n  events: ../../../events.txt\n", "sim.events", "../../../events.txt", 3},
+    };
+    for (const Case& c : refused) {
+        std::ofstream(board) << c.yaml;
+        BoardConfig b;
+        std::string err;
+        EXPECT_FALSE(load_board(board, b, err)) << c.yaml;
+        EXPECT_EQ(err, board + ":" + std::to_string(c.line) + ": field '" + c.field + "': '" + c.value +
+                           "' leads out of the board file's directory " + base +
+                           " (relative paths must stay inside it; give an absolute path instead)");
+    }
+    // Inside the directory (also through a ".." that stays inside), and absolute paths.
+    std::ofstream(board) << "board: t\ncalibration: scopes/../scopes/a.json\nanalysis:\n  tool_model: /opt/m.bin\n"
+                            "sim:\n  input: clip.mp4\n  output: ../out/x.mkv\n";
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(board, b, err)) << err;
+    EXPECT_EQ(b.calibration, (dir / "boards" / "scopes" / "a.json").string());
+    EXPECT_EQ(b.tool_model, "/opt/m.bin");
+    EXPECT_EQ(b.sim_output, (dir / "out" / "x.mkv").string());  // outputs: docs/reliability.md
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace endotower::firmware

@@ -335,6 +335,29 @@ TEST(RecordedSource, LosslessVideoFileExactPixels) {
     EXPECT_EQ(src.frames_read(), 10);
 }
 
+// loops (toolchain/soak.sh): the file again from its first frame, the index, capture
+// time and sequence running on.
+TEST(RecordedSource, LoopsReplayTheFileWithTimeRunningOn) {
+    test::TempDir dir("video");
+    const std::string path = dir.file("clip.mkv");
+    const auto frames = write_clip(path, 10, 64, 48, 30.0, false);
+    VirtualClock clock(kT0);
+    RecordedFrameSource src({path, 0.0, 4, 3}, clock);
+    ASSERT_TRUE(src.open()) << src.error();
+    ASSERT_TRUE(src.start());
+    for (int i = 0; i < 30; ++i) {
+        Frame f;
+        ASSERT_EQ(src.next(f, 0), SourceStatus::kFrame) << i;
+        EXPECT_EQ(f.sequence, static_cast<std::uint64_t>(i));
+        EXPECT_EQ(f.capture_ns, kT0 + std::llround(i * 1e9 / 30.0));
+        EXPECT_TRUE(same_pixels(f, frames[static_cast<std::size_t>(i % 10)])) << "frame " << i;
+        src.release(f);
+    }
+    Frame f;
+    EXPECT_EQ(src.next(f, 0), SourceStatus::kEndOfStream);
+    EXPECT_EQ(src.frames_read(), 30);
+}
+
 TEST(RecordedSource, TruncatedVideoEndsAtTheLastGoodFrame) {
     test::TempDir dir("video");
     const std::string path = dir.file("cut.mkv");

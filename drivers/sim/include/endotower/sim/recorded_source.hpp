@@ -26,6 +26,9 @@ struct RecordedSourceOptions {
     std::string path;
     double fps_override = 0.0;
     int buffer_count = 6;
+    // Video files: play the file this many times in a row (toolchain/soak.sh); the
+    // frame index, capture times and sequence numbers run on across the restarts.
+    int loops = 1;
 };
 
 class RecordedFrameSource final : public hal::FrameSource {
