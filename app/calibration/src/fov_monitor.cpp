@@ -202,9 +202,9 @@ void mask_outside(const hal::Frame& frame, const FovCircle& circle) {
         inside_span(circle, 2 * y + 1.0, f.width, x0, x1);
         std::uint8_t* row = uv + static_cast<std::ptrdiff_t>(y) * f.stride;
         const int p0 = (x0 + 1) / 2, p1 = x1 / 2;
-        std::memset(row, 128, static_cast<std::size_t>(2 * p0));
+        std::memset(row, 128, 2 * static_cast<std::size_t>(p0));
         if (p1 < f.width / 2)
-            std::memset(row + 2 * p1, 128, static_cast<std::size_t>(2 * (f.width / 2 - p1)));
+            std::memset(row + 2 * p1, 128, 2 * static_cast<std::size_t>(f.width / 2 - p1));
     }
 }
 
