@@ -148,8 +148,10 @@ long long area_of(const hal::Rect& r) {
 
 void attribute(unsigned slot, int size, std::size_t stride, std::size_t offset) {
     glEnableVertexAttribArray(slot);
-    glVertexAttribPointer(slot, size, GL_FLOAT, GL_FALSE, static_cast<GLsizei>(stride),
-                          reinterpret_cast<const void*>(offset));
+    // With a bound vertex buffer GLES takes the byte offset in the pointer argument.
+    glVertexAttribPointer(
+        slot, size, GL_FLOAT, GL_FALSE, static_cast<GLsizei>(stride),
+        reinterpret_cast<const void*>(offset));  // NOLINT(performance-no-int-to-ptr)
 }
 
 class GlesRenderer final : public hal::OverlayRenderer {

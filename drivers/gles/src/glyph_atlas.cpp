@@ -84,8 +84,9 @@ bool GlyphAtlas::build(const std::string& font_path, std::string& error) {
             face.line_height = static_cast<int>((ft.face->size->metrics.height + 63) >> 6);
             face.ascender = static_cast<int>((ft.face->size->metrics.ascender + 63) >> 6);
             for (int c = 0; c < GlyphFace::kCount; ++c) {
-                e = FT_Load_Char(ft.face, static_cast<FT_ULong>(GlyphFace::kFirst + c),
-                                 FT_LOAD_RENDER);
+                e = FT_Load_Char(
+                    ft.face, static_cast<FT_ULong>(GlyphFace::kFirst) + static_cast<FT_ULong>(c),
+                    FT_LOAD_RENDER);
                 if (e != 0) {
                     error = ft_error("FT_Load_Char", font_path, e);
                     return false;
