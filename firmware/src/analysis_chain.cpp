@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <optional>
 
@@ -114,6 +115,20 @@ sci::SciMedia load_sci_media(const BoardConfig& b, bool renderer,
         if (m.message.empty() || renderer) m.message = problems.substr(0, 90);
     }
     return m;
+}
+
+// The corrected (pinhole) point whose source in the input image is `pt`: a fixed point,
+// the distortion is mild. Borrows the undistorter; allocates nothing per call.
+std::function<vision::Point2(vision::Point2)> corrected_point(const calibration::Undistorter& u) {
+    return [&u](vision::Point2 pt) {
+        vision::Point2 q = pt;
+        for (int i = 0; i < 12; ++i) {
+            const calibration::Point2 s = u.source_of(q.x, q.y);
+            q.x += pt.x - s.x;
+            q.y += pt.y - s.y;
+        }
+        return q;
+    };
 }
 
 }  // namespace
@@ -234,17 +249,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
             error.clear();
         } else {
             camera = {p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy};
-            // The corrected point whose source is p: a fixed point, the distortion is mild.
-            calibration::Undistorter* u = &p.undistorter;
-            auto to_corrected = [u](vision::Point2 pt) {
-                vision::Point2 q = pt;
-                for (int i = 0; i < 12; ++i) {
-                    const calibration::Point2 s = u->source_of(q.x, q.y);
-                    q.x += pt.x - s.x;
-                    q.y += pt.y - s.y;
-                }
-                return q;
-            };
+            const auto to_corrected = corrected_point(p.undistorter);
             if (board.tracker != "none")
                 p.tracking->set_camera({p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy}, to_corrected,
                                        board.tool_diameter_mm);
@@ -264,16 +269,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
             std::printf(
                 "markers: the calibration does not fit the input: positions in pixels only\n");
         } else {
-            calibration::Undistorter* u = &p.undistorter;
-            auto to_corrected = [u](vision::Point2 pt) {
-                vision::Point2 q = pt;
-                for (int i = 0; i < 12; ++i) {
-                    const calibration::Point2 s = u->source_of(q.x, q.y);
-                    q.x += pt.x - s.x;
-                    q.y += pt.y - s.y;
-                }
-                return q;
-            };
+            const auto to_corrected = corrected_point(p.undistorter);
             p.marker_tracker->set_calibration(
                 *p.cal.separation, {p.cal.fx, p.cal.fy, p.cal.cx, p.cal.cy}, to_corrected);
         }
