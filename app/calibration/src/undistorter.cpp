@@ -523,7 +523,28 @@ Point2 Undistorter::source_of(double x, double y) const {
         const double s = p.distorted_radius(r) / r;
         return {p.cx + dx * s, p.cy + dy * s};
     }
-    std::vector<cv::Point3d> ray{{(x - c.cx) / c.fx, (y - c.cy) / c.fy, 1.0}};
+    // OpenCV's models written out (cv::projectPoints allocates per call, and this runs
+    // per tracked point per frame); the tilted-sensor model (14 coefficients) goes to
+    // OpenCV.
+    const double a = (x - c.cx) / c.fx, b = (y - c.cy) / c.fy, r2 = a * a + b * b;
+    const std::vector<double>& k = c.distortion;
+    auto coef = [&k](std::size_t i) { return i < k.size() ? k[i] : 0.0; };
+    if (c.model == LensModel::kFisheye) {
+        const double r = std::sqrt(r2), t = std::atan(r), t2 = t * t;
+        const double td = t * (1 + t2 * (coef(0) + t2 * (coef(1) + t2 * (coef(2) + t2 * coef(3)))));
+        const double s = r > 1e-12 ? td / r : 1.0;
+        return {c.fx * a * s + c.cx, c.fy * b * s + c.cy};
+    }
+    if (k.size() <= 12) {
+        const double radial = (1 + r2 * (coef(0) + r2 * (coef(1) + r2 * coef(4)))) /
+                              (1 + r2 * (coef(5) + r2 * (coef(6) + r2 * coef(7))));
+        const double u = a * radial + 2 * coef(2) * a * b + coef(3) * (r2 + 2 * a * a) +
+                         r2 * (coef(8) + r2 * coef(9));
+        const double v = b * radial + coef(2) * (r2 + 2 * b * b) + 2 * coef(3) * a * b +
+                         r2 * (coef(10) + r2 * coef(11));
+        return {c.fx * u + c.cx, c.fy * v + c.cy};
+    }
+    std::vector<cv::Point3d> ray{{a, b, 1.0}};
     std::vector<cv::Point2d> px;
     const cv::Mat zero = cv::Mat::zeros(3, 1, CV_64F);
     if (c.model == LensModel::kFisheye)

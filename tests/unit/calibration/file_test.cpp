@@ -357,6 +357,44 @@ TEST(Undistorter, InterpolatedMapStaysOnTheExactMap) {
     }
 }
 
+// source_of writes OpenCV's lens models out (no allocation per call): it agrees with
+// cv::projectPoints / cv::fisheye::projectPoints for 4, 5, 8 and 12 coefficients and
+// the fisheye model, across the frame.
+TEST(Undistorter, SourceOfMatchesOpenCvProjection) {
+    struct Case {
+        LensModel model;
+        std::vector<double> d;
+    };
+    for (const Case& k :
+         {Case{LensModel::kPinhole, {-0.3, 0.1, 0.001, -0.002}},
+          Case{LensModel::kPinhole, {-0.488, 0.347, 0, 0, -0.145}},
+          Case{LensModel::kPinhole, {-0.4, 0.2, 0.001, 0.002, -0.05, 0.01, 0.02, -0.01}},
+          Case{LensModel::kPinhole,
+               {-0.4, 0.2, 0.001, 0.002, -0.05, 0.01, 0.02, -0.01, 1e-3, -2e-3, 3e-3, 1e-3}},
+          Case{LensModel::kFisheye, {0.05, -0.02, 0.01, -0.003}}}) {
+        Calibration c = sample();
+        c.model = k.model;
+        c.distortion = k.d;
+        Undistorter u;
+        std::string error;
+        ASSERT_TRUE(u.init(c, error)) << error;
+        const cv::Mat kk = (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
+        const cv::Mat zero = cv::Mat::zeros(3, 1, CV_64F);
+        for (int y = 0; y < c.height; y += 71)
+            for (int x = 0; x < c.width; x += 64) {
+                std::vector<cv::Point3d> ray{{(x - c.cx) / c.fx, (y - c.cy) / c.fy, 1.0}};
+                std::vector<cv::Point2d> px;
+                if (k.model == LensModel::kFisheye)
+                    cv::fisheye::projectPoints(ray, px, zero, zero, kk, cv::Mat(k.d));
+                else
+                    cv::projectPoints(ray, zero, zero, kk, cv::Mat(k.d), px);
+                const Point2 s = u.source_of(x, y);
+                EXPECT_NEAR(s.x, px[0].x, 1e-6) << x << ", " << y << ", " << k.d.size();
+                EXPECT_NEAR(s.y, px[0].y, 1e-6) << x << ", " << y << ", " << k.d.size();
+            }
+    }
+}
+
 TEST(Undistorter, FoldingBookPolynomialIsRefused) {
     Calibration c = sample();
     c.model = LensModel::kBook;
