@@ -5,13 +5,16 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include "calibrate_live.hpp"
 #include "commands.hpp"
 #include "endotower/calibration/book_calibration.hpp"
 #include "endotower/calibration/calibration_file.hpp"
+#include "endotower/calibration/undistorter.hpp"
 #include "endotower/calibration/zhang_calibration.hpp"
 #include "endotower/system/syscall.hpp"
 
@@ -36,6 +39,9 @@ void print_calibrate_help() {
         "                   technician moves and tilts the target (OpenCV targets only)\n"
         "  --views N        --live: views to keep, default 15 (at least 4)\n"
         "  --save-views DIR --live: also write the kept views there as PNG\n"
+        "  --undistorted DIR after writing the file, the images undistorted with it (the\n"
+        "                   firmware's remap) as PNG, to check that straight edges are\n"
+        "                   straight\n"
         "  --target T       chessboard:COLSxROWS (inner corners) | circles:COLSxROWS |\n"
         "                   asymmetric-circles:COLSxROWS | charuco:COLSxROWS[:DICT] |\n"
         "                   squares (the book's chart: --images are chart images, --model book)\n"
@@ -145,11 +151,49 @@ void print_book(const BookResult& b, int order) {
                         100.0 * (b.separation->separation_px[i] / b.pinhole_px[i] - 1));
 }
 
+// The calibration's own remap (Undistorter, as the firmware would run it per frame)
+// over the images it was made from, as PNGs named after them in `dir`, each written
+// atomically: the technician checks that straight edges came out straight.
+bool write_undistorted(const Calibration& cal, const std::vector<const GrayImage*>& images,
+                       const std::string& dir, int& written, std::string& error) {
+    Undistorter u;
+    if (!u.init(cal, error)) return false;
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) {
+        error = "cannot create " + dir + ": " + ec.message();
+        return false;
+    }
+    cv::Mat out(cal.height, cal.width, CV_8UC1);
+    std::vector<std::uint8_t> png;
+    for (const GrayImage* g : images) {
+        if (g->width != cal.width || g->height != cal.height) {
+            error = g->name + ": " + std::to_string(g->width) + "x" + std::to_string(g->height) +
+                    ", the calibration is " + std::to_string(cal.width) + "x" +
+                    std::to_string(cal.height);
+            return false;
+        }
+        hal::Frame in, o;
+        in.format = o.format = {g->width, g->height, g->width, hal::PixelFormat::kGray8};
+        in.data = const_cast<std::uint8_t*>(g->pixels.data());
+        o.data = out.data;
+        if (!u.apply(in, o) || !cv::imencode(".png", out, png)) {
+            error = g->name + ": cannot undistort or encode";
+            return false;
+        }
+        const fs::path path = fs::path(dir) / (fs::path(g->name).stem().string() + ".png");
+        if (!system::write_file_atomic(path.string(), std::string(png.begin(), png.end()), error))
+            return false;
+        ++written;
+    }
+    return true;
+}
+
 }  // namespace
 
 int run_calibrate_command(const Args& args) {
     std::string images, target, spacing, model_name = "pinhole", out, scope, white, chart, marker;
-    std::string live_board, save_views;
+    std::string live_board, save_views, undistorted;
     double chart_pitch = 8, reference_mm = 50, order = 3, marker_mm = 10, live_views = 15;
     bool zero_tangent = false;
     for (std::size_t i = 0; i < args.size(); ++i) {
@@ -163,9 +207,10 @@ int run_calibrate_command(const Args& args) {
             continue;
         }
         static const char* kValued[] = {
-            "--images",    "--target", "--spacing",     "--model",        "--out",   "--scope",
-            "--white",     "--chart",  "--chart-pitch", "--reference-mm", "--order", "--marker",
-            "--marker-mm", "--live",   "--views",       "--save-views"};
+            "--images",     "--target",     "--spacing",   "--model",       "--out",
+            "--scope",      "--white",      "--chart",     "--chart-pitch", "--reference-mm",
+            "--order",      "--marker",     "--marker-mm", "--live",        "--views",
+            "--save-views", "--undistorted"};
         bool known = false;
         for (const char* o : kValued) known = known || k == o;
         if (!known) return usage_error("unknown option '" + k + "'");
@@ -177,6 +222,8 @@ int run_calibrate_command(const Args& args) {
             live_board = v;
         else if (k == "--save-views")
             save_views = v;
+        else if (k == "--undistorted")
+            undistorted = v;
         else if (k == "--views" &&
                  (!parse_number(v, 4, 500, live_views) || live_views != std::floor(live_views)))
             return usage_error("--views needs a whole number 4..500, got '" + v + "'");
@@ -258,8 +305,8 @@ int run_calibrate_command(const Args& args) {
     // OpenCV's calibration on the target views.
     std::optional<ZhangResult> zhang;
     std::vector<View> views;
+    std::vector<GrayImage> imgs;
     if (!squares) {
-        std::vector<GrayImage> imgs;
         std::vector<std::string> missing;
         if (!live_board.empty()) {
             LiveViews live;
@@ -370,6 +417,17 @@ int run_calibrate_command(const Args& args) {
     }
     std::printf("wrote %s (scope %s, model %s, RMS %.3f px, hash %s)\n", out.c_str(), scope.c_str(),
                 to_string(cal.model), cal.rms, content_hash(text).c_str());
+    if (!undistorted.empty()) {
+        std::vector<const GrayImage*> sources;
+        for (const GrayImage& g : imgs) sources.push_back(&g);
+        for (const DistanceImage& c : chart_images) sources.push_back(&c.image);
+        int written = 0;
+        if (!write_undistorted(cal, sources, undistorted, written, error)) {
+            std::fprintf(stderr, "endotower calibrate: --undistorted: %s\n", error.c_str());
+            return kExitFailure;
+        }
+        std::printf("wrote %d undistorted image(s) to %s\n", written, undistorted.c_str());
+    }
     return kExitOk;
 }
 

@@ -204,6 +204,60 @@ TEST_F(CalibrateCommand, BothMethodsOnTheSimulatedScope) {
         EXPECT_NE(r.out.find(s), std::string::npos) << s;
 }
 
+// --undistorted: the chessboard views through the calibration's own remap. The
+// corners of every row of the board lie on a straight line in the undistorted images
+// (the simulated lens bends them by pixels), the images keep their names and size.
+TEST_F(CalibrateCommand, UndistortedViewsHaveStraightRows) {
+    const fs::path out = dir / "scope-u.json", und = dir / "undistorted";
+    const CommandRun r = run("--images " + d("chess") + " --target chessboard:9x6 --spacing 4 " +
+                             "--out " + out.string() + " --undistorted " + und.string());
+    ASSERT_EQ(r.rc, 0) << r.out;
+    EXPECT_NE(r.out.find("undistorted image(s) to"), std::string::npos) << r.out;
+    // Mean distance of the inner corners from the line through their row's end corners.
+    auto bend = [](const std::vector<cv::Point2f>& c) {
+        double sum = 0;
+        for (int row = 0; row < 6; ++row) {
+            const cv::Point2f a = c[row * 9], b = c[row * 9 + 8];
+            const cv::Point2f n(-(b.y - a.y), b.x - a.x);
+            const double len = std::hypot(n.x, n.y);
+            for (int i = 1; i < 8; ++i) {
+                const cv::Point2f p = c[row * 9 + i] - a;
+                sum += std::abs(p.x * n.x + p.y * n.y) / len;
+            }
+        }
+        return sum / 42;
+    };
+    int compared = 0;
+    double worst_in = 0, worst_out = 0;  // sums over the views
+    for (const auto& e : fs::directory_iterator(d("chess"))) {
+        const cv::Mat in = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+        const fs::path up = und / (e.path().stem().string() + ".png");
+        ASSERT_TRUE(fs::exists(up)) << up;
+        const cv::Mat u = cv::imread(up.string(), cv::IMREAD_GRAYSCALE);
+        ASSERT_EQ(u.size(), in.size());
+        std::vector<cv::Point2f> ci, cu;
+        if (!cv::findChessboardCorners(in, {9, 6}, ci) || !cv::findChessboardCorners(u, {9, 6}, cu))
+            continue;
+        const cv::TermCriteria term(cv::TermCriteria::EPS | cv::TermCriteria::COUNT, 40, 0.01);
+        cv::cornerSubPix(in, ci, {5, 5}, {-1, -1}, term);
+        cv::cornerSubPix(u, cu, {5, 5}, {-1, -1}, term);
+        worst_in += bend(ci);
+        worst_out += bend(cu);
+        ++compared;
+    }
+    ASSERT_GE(compared, 4);
+    const double mean_in = worst_in / compared, mean_out = worst_out / compared;
+    std::printf("row bend: %d views, distorted %.3f px, undistorted %.3f px\n", compared, mean_in,
+                mean_out);
+    Calibration c;
+    std::string error;
+    ASSERT_TRUE(load_calibration(out.string(), c, error)) << error;
+    // Undistorted, the rows are straight to within the calibration's own reprojection
+    // error, and several times straighter than the lens shows them.
+    EXPECT_LT(mean_out, c.rms);
+    EXPECT_LT(3 * mean_out, mean_in);
+}
+
 // --live: the board's camera is a recording of the technician at work: each of the 8
 // chessboard poses held for 3 frames, a frame without the target between poses. Each
 // pose is kept once (a held pose is the same view), the calibration equals the
