@@ -246,9 +246,18 @@ bool KmsDevice::probe_connected() {
 }
 
 bool KmsDevice::connected_now() {
-    Ptr<drmModeConnector> c(drmModeGetConnectorCurrent(fd, connector_id));
+    // The connector's last known status without a probe and without allocating (this
+    // runs once a second on the video thread): GETCONNECTOR with room for one mode is
+    // what drmModeGetConnectorCurrent does, minus its mallocs; with count_modes 0 the
+    // kernel would probe the monitor.
+    drm_mode_modeinfo mode{};
+    drm_mode_get_connector conn{};
+    conn.connector_id = connector_id;
+    conn.count_modes = 1;
+    conn.modes_ptr = reinterpret_cast<std::uintptr_t>(&mode);
     // A failed read is not an unplug: the commit path finds real trouble.
-    return !c || c->connection != DRM_MODE_DISCONNECTED;
+    if (drmIoctl(fd, DRM_IOCTL_MODE_GETCONNECTOR, &conn) != 0) return true;
+    return conn.connection != DRM_MODE_DISCONNECTED;
 }
 
 }  // namespace endotower::display
