@@ -22,6 +22,7 @@ target_packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libdrm-dev libgbm-dev libegl-dev libgles-dev
   libgpiod-dev libhidapi-dev libusb-1.0-0-dev
+  libjpeg62-turbo-dev
 )
 
 sudo=()
