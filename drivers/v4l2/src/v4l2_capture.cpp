@@ -502,22 +502,23 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         m.seq_high = seq;
         m.last_seq = seq;
         m.have_seq = true;
-        out.data = static_cast<std::uint8_t*>(m.buffers[index].data);
+        auto* data = static_cast<std::uint8_t*>(m.buffers[index].data);
         if (m.mjpeg) {
-            // Decoded under the lock: release() comes from the same video thread.
+            // Decoded under the lock (a few ms; the pipeline releases from this thread).
             std::uint8_t* frame =
                 m.decoded.data() + static_cast<std::size_t>(index) * m.fmt.size_bytes();
             const std::size_t end = std::min<std::size_t>(newest_used, m.buffers[index].length);
             const std::size_t begin = std::min<std::size_t>(newest_offset, end);
-            if (m.decoder->decode(out.data + begin, end - begin, seq, frame, m.fmt.width,
-                                  m.fmt.height, m.fmt.stride) != MjpegResult::kDecoded) {
+            if (m.decoder->decode(data + begin, end - begin, seq, frame, m.fmt.width, m.fmt.height,
+                                  m.fmt.stride) != MjpegResult::kDecoded) {
                 m.requeue(index);  // like a flagged buffer: the video goes on with the next
                 ++m.stats.corrupt;
-                m.error = m.decoder->message();  // reserved: no allocation
+                m.error = m.decoder->message();  // fits the reserved capacity
                 continue;
             }
-            out.data = frame;
+            data = frame;
         }
+        out.data = data;
         out.format = m.fmt;
         out.sequence = seq;
         out.buffer_index = index;
