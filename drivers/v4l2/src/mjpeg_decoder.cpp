@@ -48,6 +48,10 @@ struct Context {
     char reason[JMSG_LENGTH_MAX + 96];
     Arena arena;
     jpeg_memory_mgr original;  // libjpeg's methods, for the permanent pool
+    // JPEG Annex K.3 tables (from libjpeg's encoder defaults), restored before each frame.
+    JHUFF_TBL standard_dc[2];
+    JHUFF_TBL standard_ac[2];
+    bool have_standard = false;
 };
 
 Context& context(j_common_ptr cinfo) {
@@ -173,6 +177,17 @@ void emit_message(j_common_ptr cinfo, int level) {
 
 void output_message(j_common_ptr) {}
 
+// A DHT-less frame must decode with the standard tables, not with those a DHT of an
+// earlier frame left in the slots (libjpeg-turbo 2.1 only fills empty slots). A frame's
+// own DHT overwrites these copies.
+void restore_standard_tables(const Context* c, jpeg_decompress_struct* cinfo) {
+    if (!c->have_standard) return;
+    for (int i = 0; i < 2; ++i) {
+        if (cinfo->dc_huff_tbl_ptrs[i]) *cinfo->dc_huff_tbl_ptrs[i] = c->standard_dc[i];
+        if (cinfo->ac_huff_tbl_ptrs[i]) *cinfo->ac_huff_tbl_ptrs[i] = c->standard_ac[i];
+    }
+}
+
 // C-style on purpose: libjpeg's errors longjmp back to the setjmp here, so no object
 // with a destructor may live in this frame or in the libjpeg frames it calls.
 MjpegResult decode_jpeg(Context* c, jpeg_decompress_struct* cinfo, const std::uint8_t* jpeg,
@@ -181,6 +196,7 @@ MjpegResult decode_jpeg(Context* c, jpeg_decompress_struct* cinfo, const std::ui
         jpeg_abort_decompress(cinfo);  // frees the image pool: the arena is reset
         return c->on_jump;
     }
+    restore_standard_tables(c, cinfo);
     jpeg_mem_src(cinfo, jpeg, static_cast<unsigned long>(size));
     jpeg_read_header(cinfo, TRUE);
     if (cinfo->progressive_mode || jpeg_has_multiple_scans(cinfo)) {
@@ -217,6 +233,28 @@ bool create_jpeg(Context* c, jpeg_decompress_struct* cinfo) {
     return true;
 }
 
+// The standard Huffman tables as libjpeg's encoder sets them by default.
+void capture_standard_tables(Context* c) {
+    jpeg_compress_struct enc;
+    std::memset(&enc, 0, sizeof enc);
+    enc.err = &c->err;
+    enc.client_data = c;
+    if (setjmp(c->jump) != 0) {
+        jpeg_destroy_compress(&enc);
+        return;
+    }
+    jpeg_create_compress(&enc);
+    enc.in_color_space = JCS_RGB;
+    enc.input_components = 3;
+    jpeg_set_defaults(&enc);
+    for (int i = 0; i < 2; ++i) {
+        c->standard_dc[i] = *enc.dc_huff_tbl_ptrs[i];
+        c->standard_ac[i] = *enc.ac_huff_tbl_ptrs[i];
+    }
+    c->have_standard = true;
+    jpeg_destroy_compress(&enc);
+}
+
 }  // namespace
 
 struct MjpegDecoder::Impl {
@@ -239,6 +277,7 @@ MjpegDecoder::MjpegDecoder(std::string_view device) : impl_(std::make_unique<Imp
     m.ctx.err.output_message = output_message;
     m.cinfo.err = &m.ctx.err;
     m.cinfo.client_data = &m.ctx;
+    capture_standard_tables(&m.ctx);
     if (!create_jpeg(&m.ctx, &m.cinfo)) return;
     jpeg_memory_mgr& mem = *m.cinfo.mem;
     m.ctx.original = mem;

@@ -269,8 +269,8 @@ struct V4l2Capture::Impl {
             if (xioctl(VIDIOC_QBUF, &b) < 0) return fail("VIDIOC_QBUF", errno);
         }
         if (mjpeg) {
-            // Sized here, at start and at a format change; a new decoder also forgets the
-            // previous stream's Huffman tables.
+            // Sized here, at start and at a format change (the decoder's arena then
+            // resizes on the first frame).
             decoded.resize(static_cast<std::size_t>(count) * fmt.size_bytes());
             decoder = std::make_unique<MjpegDecoder>(config.device);
         }

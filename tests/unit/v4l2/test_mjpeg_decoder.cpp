@@ -222,6 +222,27 @@ TEST(MjpegDecoder, InsertsTheStandardHuffmanTablesWhenDhtIsMissing) {
     }
 }
 
+TEST(MjpegDecoder, DhtLessFrameAfterCustomTablesUsesTheStandardOnes) {
+    // An optimised JPEG carries its own (non-standard) tables; a DHT-less frame after it
+    // must not decode with them (libjpeg-turbo 2.1 alone would: "bad Huffman code").
+    const cv::Mat original = picture(640, 480);
+    Bytes optimised;
+    ASSERT_TRUE(cv::imencode(".jpg", original, optimised,
+                             {cv::IMWRITE_JPEG_QUALITY, 90, cv::IMWRITE_JPEG_OPTIMIZE, 1}));
+    const Bytes standard = imencode(original, 90);
+    const Bytes bare = strip_dht(standard);
+    const cv::Mat reference = cv::imdecode(standard, cv::IMREAD_COLOR);
+    MjpegDecoder d("/dev/video0");
+    for (int round = 0; round < 2; ++round) {
+        const Decoded a = decode(d, optimised, 640, 480);
+        ASSERT_EQ(a.result, MjpegResult::kDecoded) << d.message();
+        EXPECT_EQ(cv::norm(a.image, cv::imdecode(optimised, cv::IMREAD_COLOR), cv::NORM_INF), 0.0);
+        const Decoded b = decode(d, bare, 640, 480);
+        ASSERT_EQ(b.result, MjpegResult::kDecoded) << d.message();
+        EXPECT_EQ(cv::norm(b.image, reference, cv::NORM_INF), 0.0);
+    }
+}
+
 TEST(MjpegDecoder, RejectsBrokenBuffersCountsThemAndDecodesTheNextGoodOne) {
     const cv::Mat original = picture(640, 480);
     const Bytes good = imencode(original, 90);

@@ -6,8 +6,8 @@
 // the end of that frame, merged into one arena of the size seen), then every frame of
 // the same geometry reuses it. The permanent pool (tables, source manager) is
 // libjpeg's own and is filled once. Frames without DHT segments (many UVC cameras omit
-// them) get the standard tables of JPEG Annex K.3, which libjpeg-turbo inserts; a
-// stream's DHT tables stay in force for later DHT-less frames of the same decoder.
+// them) decode with the standard tables of JPEG Annex K.3 (libjpeg's encoder defaults),
+// restored before every frame so that an earlier frame's DHT does not linger.
 //
 // decode() never throws nor aborts: libjpeg's errors and warnings (a truncated buffer
 // ends in "Premature end of JPEG file") end the frame through setjmp/longjmp and it is
