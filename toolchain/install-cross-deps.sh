@@ -23,6 +23,7 @@ target_packages=(
   libdrm-dev libgbm-dev libegl-dev libgles-dev
   libgpiod-dev libhidapi-dev libusb-1.0-0-dev
   libfreetype-dev libdcmtk-dev
+  libjpeg62-turbo-dev
 )
 
 sudo=()

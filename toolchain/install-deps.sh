@@ -23,6 +23,8 @@ packages=(
   # reliability (issue 10): clang-tidy (toolchain/tidy.sh), strace (the no-network test),
   # systemd-analyze (the unit's security score, docs/reliability.md)
   clang-tidy strace systemd
+  # MJPEG capture (issue 9): libjpeg-turbo
+  libjpeg62-turbo-dev
 )
 
 missing=()

@@ -172,8 +172,9 @@ bool load_input_devices(Reader& r, const YAML::Node& root, BoardConfig& c) {
             return false;
         v4l2::CaptureFormat f{};
         if (!v4l2::parse_capture_format(k.format, f))
-            return r.fail(n["format"], "capture.format",
-                          "unknown format '" + k.format + "' (expected yuyv, uyvy, nv12 or bgrx)");
+            return r.fail(
+                n["format"], "capture.format",
+                "unknown format '" + k.format + "' (expected yuyv, uyvy, nv12, bgrx or mjpeg)");
         if (!v4l2::info(f).supported)
             return r.fail(n["format"], "capture.format", std::string(v4l2::info(f).why));
         v4l2::DvTimingsName dv;

@@ -78,7 +78,7 @@ struct BoardConfig {
     struct Capture {
         bool present = false;
         std::string device = "/dev/video0";
-        std::string format = "yuyv";  // yuyv | uyvy | nv12 (mjpeg is refused)
+        std::string format = "yuyv";  // yuyv | uyvy | nv12 | bgrx | mjpeg (decoded to BGR24)
         int width = 1920, height = 1080;
         double fps = 0.0;  // 0 = the device's (or the DV timings') rate
         int buffers = 4;

@@ -218,12 +218,12 @@ int run_run_command(const Args& args) {
     const display::KmsSinkStats& ds = sink.stats();
     std::printf(
         "endotower run: %lld frames in, %lld out, %lld late; capture: %llu dropped by the driver, "
-        "%llu superseded, %llu timeouts, %llu format changes, %llu reopens\n",
+        "%llu superseded, %llu timeouts, %llu format changes, %llu reopens, %llu corrupt\n",
         static_cast<long long>(s.frames_in), static_cast<long long>(s.frames_out),
         static_cast<long long>(s.late_frames), static_cast<unsigned long long>(cs.drops),
         static_cast<unsigned long long>(cs.skipped), static_cast<unsigned long long>(cs.timeouts),
         static_cast<unsigned long long>(cs.format_changes),
-        static_cast<unsigned long long>(cs.reopens));
+        static_cast<unsigned long long>(cs.reopens), static_cast<unsigned long long>(cs.corrupt));
     std::printf(
         "latency (capture -> page flip): target %.3f ms; min %.3f, median %.3f, p99 %.3f, max %.3f "
         "ms\n",

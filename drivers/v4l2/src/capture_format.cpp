@@ -8,8 +8,6 @@
 namespace endotower::v4l2 {
 
 namespace {
-// MJPEG is refused rather than decoded: libjpeg allocates its image pools per frame
-// (jpeg_start_decompress), which the per-frame path must not do; boards pick a raw format.
 constexpr CaptureFormatInfo kFormats[] = {
     {CaptureFormat::kYuyv, "yuyv", V4L2_PIX_FMT_YUYV, hal::PixelFormat::kYuyv, true, ""},
     {CaptureFormat::kUyvy, "uyvy", V4L2_PIX_FMT_UYVY, hal::PixelFormat::kUyvy, true, ""},
@@ -17,9 +15,8 @@ constexpr CaptureFormatInfo kFormats[] = {
     // B G R X bytes (V4L2 XBGR32 = DRM XRGB8888): what a display plane without YUV
     // takes directly, so the DMABUF is scanned out without a copy (vivid -> vkms).
     {CaptureFormat::kBgrx, "bgrx", V4L2_PIX_FMT_XBGR32, hal::PixelFormat::kBgra32, true, ""},
-    {CaptureFormat::kMjpeg, "mjpeg", V4L2_PIX_FMT_MJPEG, hal::PixelFormat::kBgr24, false,
-     "MJPEG is not supported: decoding it would allocate per frame (libjpeg image pools); "
-     "set capture.format to yuyv, uyvy, nv12 or bgrx"},
+    // Decoded to BGR24 by MjpegDecoder into a frame of the driver's (no DMABUF).
+    {CaptureFormat::kMjpeg, "mjpeg", V4L2_PIX_FMT_MJPEG, hal::PixelFormat::kBgr24, true, ""},
 };
 }  // namespace
 

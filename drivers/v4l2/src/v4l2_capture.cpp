@@ -12,8 +12,10 @@
 #include <cmath>
 #include <cstring>
 #include <mutex>
+#include <vector>
 
 #include "endotower/system/syscall.hpp"
+#include "endotower/v4l2/mjpeg_decoder.hpp"
 
 namespace endotower::v4l2 {
 
@@ -54,6 +56,10 @@ struct V4l2Capture::Impl {
     bool have_seq = false;
     std::uint64_t seq_high = 0;  // extends the driver's 32-bit sequence
     int borrowed = 0;
+    // MJPEG: buffer i is decoded into frame i of `decoded` (BGR24), lent instead of it.
+    bool mjpeg = false;
+    std::unique_ptr<MjpegDecoder> decoder;
+    std::vector<std::uint8_t> decoded;
     mutable std::mutex mutex;  // release() may come from another thread
 
     bool fail(const char* call, int err) {
@@ -211,6 +217,8 @@ struct V4l2Capture::Impl {
                     std::to_string(height) + ")";
             return false;
         }
+        mjpeg = config.format == CaptureFormat::kMjpeg;
+        if (mjpeg) stride = width * 3;  // the decoded frame's; the buffers hold JPEG
         fmt = {static_cast<int>(width), static_cast<int>(height), static_cast<int>(stride),
                fi.pixel};
         if (!dv && config.fps > 0) {
@@ -255,9 +263,16 @@ struct V4l2Capture::Impl {
             e.index = static_cast<std::uint32_t>(i);
             e.flags = O_RDONLY | O_CLOEXEC;
             // A driver without DMABUF export still captures; the display then copies.
-            buf.dmabuf = xioctl(VIDIOC_EXPBUF, &e) == 0 ? e.fd : -1;
+            // MJPEG buffers hold JPEG, which no display takes: not exported.
+            buf.dmabuf = !mjpeg && xioctl(VIDIOC_EXPBUF, &e) == 0 ? e.fd : -1;
             b = buffer_of(plane, i);
             if (xioctl(VIDIOC_QBUF, &b) < 0) return fail("VIDIOC_QBUF", errno);
+        }
+        if (mjpeg) {
+            // Sized here, at start and at a format change (the decoder's arena then
+            // resizes on the first frame).
+            decoded.resize(static_cast<std::size_t>(count) * fmt.size_bytes());
+            decoder = std::make_unique<MjpegDecoder>(config.device);
         }
         int type = static_cast<int>(buf_type);
         if (xioctl(VIDIOC_STREAMON, &type) < 0) return fail("VIDIOC_STREAMON", errno);
@@ -353,6 +368,7 @@ struct V4l2Capture::Impl {
 
 V4l2Capture::V4l2Capture(V4l2CaptureConfig config) : impl_(std::make_unique<Impl>()) {
     impl_->config = std::move(config);
+    impl_->error.reserve(512);  // per-frame messages (corrupt MJPEG) then fit without allocating
 }
 
 V4l2Capture::~V4l2Capture() {
@@ -448,6 +464,7 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         if (!(p.revents & POLLIN)) continue;
         // Take every completed buffer; keep the newest, give the older ones back.
         v4l2_buffer newest{};
+        std::uint32_t newest_used = 0, newest_offset = 0;  // JPEG bytes and where they start
         bool have = false;
         for (;;) {
             v4l2_plane plane{};
@@ -467,12 +484,15 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
                 ++m.stats.skipped;
             }
             newest = b;
+            newest_used = m.mplane ? plane.bytesused : b.bytesused;
+            newest_offset = m.mplane ? plane.data_offset : 0;
             have = true;
         }
         if (!have) continue;
         const int index = static_cast<int>(newest.index);
         if ((newest.flags & V4L2_BUF_FLAG_ERROR) || (!m.stats.signal && m.dv)) {
             m.requeue(index);  // a damaged frame, or noise while there is no signal
+            m.stats.corrupt += (newest.flags & V4L2_BUF_FLAG_ERROR) ? 1 : 0;
             continue;
         }
         // Sequence numbers are 32-bit in V4L2; extend them across wrap-around.
@@ -482,11 +502,28 @@ hal::SourceStatus V4l2Capture::next(hal::Frame& out, hal::Nanos timeout_ns) {
         m.seq_high = seq;
         m.last_seq = seq;
         m.have_seq = true;
+        auto* data = static_cast<std::uint8_t*>(m.buffers[index].data);
+        if (m.mjpeg) {
+            // Decoded under the lock (a few ms; the pipeline releases from this thread).
+            std::uint8_t* frame =
+                m.decoded.data() + static_cast<std::size_t>(index) * m.fmt.size_bytes();
+            const std::size_t end = std::min<std::size_t>(newest_used, m.buffers[index].length);
+            const std::size_t begin = std::min<std::size_t>(newest_offset, end);
+            if (m.decoder->decode(data + begin, end - begin, seq, frame, m.fmt.width, m.fmt.height,
+                                  m.fmt.stride) != MjpegResult::kDecoded) {
+                m.requeue(index);  // like a flagged buffer: the video goes on with the next
+                ++m.stats.corrupt;
+                m.error = m.decoder->message();  // fits the reserved capacity
+                continue;
+            }
+            data = frame;
+        }
+        out.data = data;
         out.format = m.fmt;
-        out.data = static_cast<std::uint8_t*>(m.buffers[index].data);
         out.sequence = seq;
         out.buffer_index = index;
-        out.dmabuf_fd = m.buffers[index].dmabuf;  // the display scans it out without a copy
+        // The display scans it out without a copy (MJPEG: -1, the display copies).
+        out.dmabuf_fd = m.buffers[index].dmabuf;
         const bool monotonic =
             (newest.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
         out.capture_ns =

@@ -285,13 +285,21 @@ TEST(BoardInput, CaptureButtonHandleValuesAndDefaults) {
     EXPECT_FALSE(d.handle.present);
 }
 
+TEST(BoardInput, CaptureFormatMjpegIsAccepted) {
+    const std::string p = write_input_board(
+        "board: t\ncapture: {device: /dev/v4l/by-id/usb-cam, format: mjpeg, width: 1920, "
+        "height: 1080, fps: 30}\n");
+    BoardConfig b;
+    std::string err;
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_EQ(b.capture.format, "mjpeg");
+}
+
 TEST(BoardInput, ErrorsNameTheLineAndField) {
     const std::pair<const char*, const char*> cases[] = {
         {"board: t\ncapture:\n  format: rgb\n",
-         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy, nv12 or bgrx)"},
-        {"board: t\ncapture:\n  format: mjpeg\n",
-         "3: field 'capture.format': MJPEG is not supported: decoding it would allocate per frame "
-         "(libjpeg image pools); set capture.format to yuyv, uyvy, nv12 or bgrx"},
+         "3: field 'capture.format': unknown format 'rgb' (expected yuyv, uyvy, nv12, bgrx or "
+         "mjpeg)"},
         {"board: t\ncapture:\n  dv_timings: 1080p\n",
          "3: field 'capture.dv_timings': expected query or timings like 1920x1080p60, got '1080p'"},
         {"board: t\ncapture:\n  buffers: 1\n", "3: field 'capture.buffers': must be between 2 and 16, got 1"},

@@ -17,7 +17,7 @@ struct CaptureFormatInfo {
     CaptureFormat format;
     std::string_view name;   // board file name: "yuyv", "uyvy", "nv12", "mjpeg", "bgrx"
     std::uint32_t fourcc;    // V4L2_PIX_FMT_*
-    hal::PixelFormat pixel;  // what the pipeline gets (MJPEG: none, see supported)
+    hal::PixelFormat pixel;  // what the pipeline gets (MJPEG: decoded to BGR24)
     bool supported;          // false: refused at start() with `why`
     std::string_view why;
 };

@@ -2,12 +2,18 @@
 // single- or multi-planar API as the device offers, one-buffer formats; MMAP buffers,
 // each also exported as a DMABUF for the display).
 //
-// Parameters (board file `capture:`): device path, format (yuyv|uyvy|nv12; mjpeg is
-// refused, see capture_format.hpp), width/height (ignored when DV timings set them),
-// fps (VIDIOC_S_PARM; 0 = leave), buffers (default 4: two queued in the driver so a
-// frame is always being filled, one on screen, one being composed; more buffers only
-// add frames that could wait), input (VIDIOC_S_INPUT, -1 = leave), dv_timings (""
-// = leave, "query" = what the receiver detects, or a name like "1920x1080p60").
+// Parameters (board file `capture:`): device path, format (yuyv|uyvy|nv12|bgrx|mjpeg),
+// width/height (ignored when DV timings set them), fps (VIDIOC_S_PARM; 0 = leave),
+// buffers (default 4: two queued in the driver so a frame is always being filled, one
+// on screen, one being composed; more buffers only add frames that could wait), input
+// (VIDIOC_S_INPUT, -1 = leave), dv_timings ("" = leave, "query" = what the receiver
+// detects, or a name like "1920x1080p60").
+//
+// MJPEG: next() decodes the buffer (MjpegDecoder) into a BGR24 frame of this object's,
+// one per buffer (allocated at start and at a format change), and lends that frame
+// (dmabuf_fd -1; the buffers are not exported). A buffer that does not decode is
+// requeued like one the driver flags V4L2_BUF_FLAG_ERROR: counted in stats().corrupt,
+// error() names the device and the buffer sequence, and next() goes on waiting.
 //
 // next() always hands out the newest completed frame: older ones found ready at the
 // same time are requeued (counted in skipped) so no frame waits behind another.
@@ -46,6 +52,7 @@ struct CaptureStats {
     std::uint64_t timeouts = 0;
     std::uint64_t format_changes = 0;
     std::uint64_t reopens = 0;  // successful reopens after the device went away
+    std::uint64_t corrupt = 0;  // flagged V4L2_BUF_FLAG_ERROR, or MJPEG that did not decode
     bool signal = false;        // false while the source reports no signal
     bool present = false;       // false while the device node is gone
 };
