@@ -34,9 +34,12 @@ void AnchoredOverlayStage::set_image_problem(int id, std::string problem) {
 }
 
 const AnchoredOverlayStage::Image* AnchoredOverlayStage::image_of(int id) const {
-    for (const Image& i : images_)
+    const Image* fallback = nullptr;  // id -1: the board's, for regions outlined with the tool
+    for (const Image& i : images_) {
         if (i.id == id) return &i;
-    return nullptr;
+        if (i.id == -1) fallback = &i;
+    }
+    return fallback;
 }
 
 void AnchoredOverlayStage::configure(const hal::FrameFormat& format) {

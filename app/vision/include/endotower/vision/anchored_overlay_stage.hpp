@@ -35,7 +35,8 @@ class AnchoredOverlayStage final : public app::AnalysisStage {
 public:
     AnchoredOverlayStage(const RegionStage& regions, hal::OverlayRenderer* renderer,
                          app::Log& log, double depth_mm = 80);
-    // Before the run: region `id`'s image, or why it has none (`problem`, shown at it).
+    // Before the run: region `id`'s image, or why it has none (`problem`, shown at it);
+    // id -1: for image regions without one of their own (those outlined with the tool).
     void set_image(int id, const hal::ImageView& image);
     void set_image_problem(int id, std::string problem);
     void set_camera(const hal::SceneCamera& camera) { scene_.camera = camera; }
