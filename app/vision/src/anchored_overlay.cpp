@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <Eigen/Dense>
 #include <opencv2/core.hpp>
 
 namespace endotower::vision {
@@ -111,13 +112,14 @@ bool tissue_pose(const RegionEstimate& e, const hal::SceneCamera& camera, double
     if (a3[2] < 0) s = -s;  // the tissue is in front of the camera
     const cv::Vec3d r1 = a1 * s, r2 = a2 * s, t = a3 * s;
     // The nearest rotation to [r1 r2 r1 x r2] (noise makes r1, r2 not quite orthonormal).
-    cv::Matx33d r(r1[0], r2[0], 0, r1[1], r2[1], 0, r1[2], r2[2], 0);
+    // Fixed-size Eigen: no allocation (cv::SVD allocates; this runs every frame).
     const cv::Vec3d r3 = r1.cross(r2);
-    r(0, 2) = r3[0], r(1, 2) = r3[1], r(2, 2) = r3[2];
-    cv::SVD svd(cv::Mat(r), cv::SVD::FULL_UV);
-    const cv::Mat rot = svd.u * svd.vt;
-    if (cv::determinant(rot) < 0 || !(t[2] > 0)) return false;
-    for (int i = 0; i < 9; ++i) out.rotation[static_cast<std::size_t>(i)] = rot.at<double>(i / 3, i % 3);
+    Eigen::Matrix3d r;
+    r << r1[0], r2[0], r3[0], r1[1], r2[1], r3[1], r1[2], r2[2], r3[2];
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d rot = svd.matrixU() * svd.matrixV().transpose();
+    if (rot.determinant() < 0 || !(t[2] > 0)) return false;
+    for (int i = 0; i < 9; ++i) out.rotation[static_cast<std::size_t>(i)] = rot(i / 3, i % 3);
     out.origin_mm = {t[0], t[1], t[2]};
     out.width_mm = (b.x1 - b.x0) / camera.fx * depth_mm;
     out.height_mm = (b.y1 - b.y0) / camera.fy * depth_mm;
