@@ -190,6 +190,14 @@ TEST(RegionsCommand, AnchoredOverlayInput) {
     // An object without a calibration: the message instead, the video goes on.
     r = run(sim + quote(poly + " overlay=object:cube"));
     EXPECT_EQ(r.status, 0) << r.output;
+    // A timeline mark's overlay is checked with its file and line.
+    std::ofstream(dir / "events.txt") << "# marks\nframe 1 region " << poly
+                                      << " overlay=object:teapot\n";
+    r = run(sim + quote(poly) + " --events " + (dir / "events.txt").string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("events.txt:2: overlay 'object:teapot': unknown object 'teapot'"),
+              std::string::npos)
+        << r.output;
     fs::remove_all(dir);
 }
 
