@@ -269,8 +269,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
                 load_anchor_image(board, m.id, m.overlay.image, p.anchor_images, *p.anchored,
                                   command);
         if (tool_overlay.kind == vision::RegionOverlayKind::kImage)  // the board's, id -1
-            load_anchor_image(board, -1, tool_overlay.image, p.anchor_images, *p.anchored,
-                              command);
+            load_anchor_image(board, -1, tool_overlay.image, p.anchor_images, *p.anchored, command);
     }
     for (vision::RegionMark& m : marks) p.regions->schedule(std::move(m));
 

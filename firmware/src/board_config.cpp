@@ -396,10 +396,9 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     }
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
-    for (std::string* p :
-         {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model,
-          &c.calibration, &c.gesture_model, &c.storage, &c.sci_media, &c.sci_patient_record,
-          &c.region_media})
+    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace,
+                           &c.tool_model, &c.calibration, &c.gesture_model, &c.storage,
+                           &c.sci_media, &c.sci_patient_record, &c.region_media})
         *p = resolve(base, *p);
     if (c.region_media.empty()) c.region_media = c.sci_media;
     out = std::move(c);

@@ -1,9 +1,9 @@
 #include "endotower/vision/anchored_overlay.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <Eigen/Dense>
 #include <opencv2/core.hpp>
 
 namespace endotower::vision {
@@ -103,9 +103,11 @@ bool tissue_pose(const RegionEstimate& e, const hal::SceneCamera& camera, double
     const double uc = (b.x0 + b.x1) / 2, vc = (b.y0 + b.y1) / 2;
     // Plane millimetres (origin at the box's centre) -> marking-frame pixels.
     const cv::Matx33d m(camera.fx / depth_mm, 0, uc, 0, camera.fy / depth_mm, vc, 0, 0, 1);
-    const cv::Matx33d k_inv = cv::Matx33d(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).inv();
+    const cv::Matx33d k_inv =
+        cv::Matx33d(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1).inv();
     const cv::Matx33d a = k_inv * homography_of(e) * m;
-    cv::Vec3d a1(a(0, 0), a(1, 0), a(2, 0)), a2(a(0, 1), a(1, 1), a(2, 1)), a3(a(0, 2), a(1, 2), a(2, 2));
+    cv::Vec3d a1(a(0, 0), a(1, 0), a(2, 0)), a2(a(0, 1), a(1, 1), a(2, 1)),
+        a3(a(0, 2), a(1, 2), a(2, 2));
     const double n1 = cv::norm(a1), n2 = cv::norm(a2);
     if (!(n1 > 1e-12 && n2 > 1e-12)) return false;
     double s = 2 / (n1 + n2);

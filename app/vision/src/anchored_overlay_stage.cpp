@@ -63,8 +63,8 @@ void AnchoredOverlayStage::message(const RegionEstimate& e, std::string_view tex
     t.size_px = size, t.align = hal::SceneText::Align::kCentre;
     t.colour = {255, 230, 120, 255};
     const float w = 0.55f * size * static_cast<float>(n) + size;
-    scene_.quads.add({t.x - w / 2, t.y - size * 0.8f, w, size * 1.6f, size * 0.3f, 0,
-                      {0, 0, 0, 170}, {}});
+    scene_.quads.add(
+        {t.x - w / 2, t.y - size * 0.8f, w, size * 1.6f, size * 0.3f, 0, {0, 0, 0, 170}, {}});
     scene_.texts.add(t);
 }
 
@@ -97,9 +97,11 @@ void AnchoredOverlayStage::process(app::AnalysisContext& ctx) {
             const Image* im = image_of(e.id);
             std::array<Point2, 4> corners{};
             if (im == nullptr || im->slot < 0) {
-                if (tracked) message(e, im ? std::string_view(im->problem) : std::string_view("image not loaded"));
-            } else if (tracked && anchored_image_corners(e, im->view.width, im->view.height,
-                                                         corners)) {
+                if (tracked)
+                    message(e, im ? std::string_view(im->problem)
+                                  : std::string_view("image not loaded"));
+            } else if (tracked &&
+                       anchored_image_corners(e, im->view.width, im->view.height, corners)) {
                 hal::SceneImage s;
                 s.image_id = im->slot;
                 s.warped = true;
@@ -111,7 +113,8 @@ void AnchoredOverlayStage::process(app::AnalysisContext& ctx) {
             ctx.trace.field("shown", shown);
             if (shown) {
                 ctx.trace.begin_array("corners_px");
-                for (const Point2& c : corners) ctx.trace.begin_array().value(c.x).value(c.y).end_array();
+                for (const Point2& c : corners)
+                    ctx.trace.begin_array().value(c.x).value(c.y).end_array();
                 ctx.trace.end_array();
             }
         } else {

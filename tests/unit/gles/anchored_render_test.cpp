@@ -85,8 +85,8 @@ protected:
 // corners mapped by H (the corners included), its inside perspective-correct.
 TEST_F(AnchoredRender, ImageCornersWithinOnePixelOfTheHomography) {
     constexpr int kS = 64;
-    const hal::Rgba8 quadrant[4] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255},
-                                    {255, 255, 255, 255}};
+    const hal::Rgba8 quadrant[4] = {
+        {255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255}, {255, 255, 255, 255}};
     std::vector<std::uint8_t> img(4 * kS * 2 * kS);  // 128 x 64: fitted 200 x 100 at y 195
     for (int y = 0; y < kS; ++y)
         for (int x = 0; x < 2 * kS; ++x) {
@@ -117,7 +117,8 @@ TEST_F(AnchoredRender, ImageCornersWithinOnePixelOfTheHomography) {
         for (double v = 0.05; v < 1; v += 0.1) {
             const cv::Vec3d t = h_ * cv::Vec3d(220 + 200 * u, 195 + 100 * v, 1);
             const hal::Rgba8 c = at(int(std::lround(t[0] / t[2])), int(std::lround(t[1] / t[2])));
-            EXPECT_EQ(c, quadrant[u < 0.5 ? (v < 0.5 ? 0 : 3) : (v < 0.5 ? 1 : 2)]) << u << ", " << v;
+            EXPECT_EQ(c, quadrant[u < 0.5 ? (v < 0.5 ? 0 : 3) : (v < 0.5 ? 1 : 2)])
+                << u << ", " << v;
         }
 }
 

@@ -536,9 +536,11 @@ TEST(GlesRendererFont, MissingFontIsNamed) {
 TEST_F(GlesRendererTest, WarpedImageFollowsTheHomographyWithinOnePixel) {
     // 64x64, quadrants red (top-left), green (top-right), blue (bottom-right), white.
     constexpr int kS = 64;
-    const Rgba8 quadrant[4] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255},
-                               {255, 255, 255, 255}};
-    auto quadrant_of = [](double u, double v) { return u < 0.5 ? (v < 0.5 ? 0 : 3) : (v < 0.5 ? 1 : 2); };
+    const Rgba8 quadrant[4] = {
+        {255, 0, 0, 255}, {0, 255, 0, 255}, {0, 0, 255, 255}, {255, 255, 255, 255}};
+    auto quadrant_of = [](double u, double v) {
+        return u < 0.5 ? (v < 0.5 ? 0 : 3) : (v < 0.5 ? 1 : 2);
+    };
     std::vector<std::uint8_t> px(4 * kS * kS);
     for (int y = 0; y < kS; ++y)
         for (int x = 0; x < kS; ++x) {
@@ -549,7 +551,8 @@ TEST_F(GlesRendererTest, WarpedImageFollowsTheHomographyWithinOnePixel) {
     ASSERT_TRUE(renderer_->set_image(2, {kS, kS, 4 * kS, px.data()})) << renderer_->error();
     // A strong perspective: the right edge is much shorter than the left.
     const cv::Point2f square[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    const cv::Point2f quad[4] = {{40.3f, 30.7f}, {260.2f, 75.1f}, {250.6f, 160.4f}, {55.9f, 215.2f}};
+    const cv::Point2f quad[4] = {
+        {40.3f, 30.7f}, {260.2f, 75.1f}, {250.6f, 160.4f}, {55.9f, 215.2f}};
     const cv::Matx33d h(cv::getPerspectiveTransform(square, quad));
     auto map = [&h](double u, double v) {
         const cv::Vec3d p = h * cv::Vec3d(u, v, 1);

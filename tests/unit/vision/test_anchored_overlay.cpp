@@ -73,8 +73,8 @@ struct KnownMotion {
         origin_now = origin + dt;
         std::vector<cv::Point2f> before, after;
         for (auto [u, v] : {std::pair{220., 160.}, {420., 160.}, {420., 330.}, {220., 330.}}) {
-            const cv::Vec3d p((u - kCamera.cx) / kCamera.fx * 80, (v - kCamera.cy) / kCamera.fy * 80,
-                              80);
+            const cv::Vec3d p((u - kCamera.cx) / kCamera.fx * 80,
+                              (v - kCamera.cy) / kCamera.fy * 80, 80);
             const cv::Vec3d q = r * (p - origin) + origin_now;
             before.emplace_back(static_cast<float>(u), static_cast<float>(v));
             after.emplace_back(static_cast<float>(kCamera.fx * q[0] / q[2] + kCamera.cx),
@@ -156,8 +156,8 @@ TEST(AnchoredOverlayStage, HiddenWhileLostBackWhenFound) {
     RegionTracker t;
     RegionStage regions(t);
     regions.schedule({0, 0, kSquare, {RegionOverlayKind::kImage, "a.png"}});
-    regions.schedule({0, 1, {{80, 60}, {200, 60}, {200, 150}, {80, 150}},
-                      {RegionOverlayKind::kObject, {}}});
+    regions.schedule(
+        {0, 1, {{80, 60}, {200, 60}, {200, 150}, {80, 150}}, {RegionOverlayKind::kObject, {}}});
     app::StderrLog log;
     AnchoredOverlayStage anchored(regions, nullptr, log);
     const std::vector<std::uint8_t> px(4 * 8 * 4, 200);

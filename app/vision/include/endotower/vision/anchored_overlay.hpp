@@ -43,8 +43,8 @@ bool anchored_image_corners(const RegionEstimate& e, int width, int height,
 struct TissuePose {
     bool valid = false;
     std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major, camera <- plane
-    Vec3 origin_mm;                                              // the centre on the tissue
-    double width_mm = 0, height_mm = 0;                          // the marked box's extent
+    Vec3 origin_mm;                                             // the centre on the tissue
+    double width_mm = 0, height_mm = 0;                         // the marked box's extent
 };
 bool tissue_pose(const RegionEstimate& e, const hal::SceneCamera& camera, double depth_mm,
                  TissuePose& out);

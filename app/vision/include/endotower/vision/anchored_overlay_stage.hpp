@@ -33,8 +33,8 @@ namespace endotower::vision {
 
 class AnchoredOverlayStage final : public app::AnalysisStage {
 public:
-    AnchoredOverlayStage(const RegionStage& regions, hal::OverlayRenderer* renderer,
-                         app::Log& log, double depth_mm = 80);
+    AnchoredOverlayStage(const RegionStage& regions, hal::OverlayRenderer* renderer, app::Log& log,
+                         double depth_mm = 80);
     // Before the run: region `id`'s image, or why it has none (`problem`, shown at it);
     // id -1: for image regions without one of their own (those outlined with the tool).
     void set_image(int id, const hal::ImageView& image);

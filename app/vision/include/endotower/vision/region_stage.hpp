@@ -19,11 +19,11 @@
 #pragma once
 
 #include <array>
-#include <span>
-#include <utility>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "endotower/app/analysis_stage.hpp"
