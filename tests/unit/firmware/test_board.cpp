@@ -210,7 +210,7 @@ TEST(Board, ErrorsNameTheLineAndField) {
          "3: field 'analysis.regions.min_inliers': must be between 4 and 1000, got 2"},
         {"board: t\nanalysis:\n  regions:\n    redetect: 5\n",
          "4: field 'analysis.regions.redetect': unknown key (expected one of: descriptor, redetect_interval, "
-         "min_inliers, detect_max_width, propagate, mark_with_tool)"},
+         "min_inliers, detect_max_width, propagate, mark_with_tool, overlay, depth_mm, media)"},
         {"board: t\nanalysis:\n  regions: {mark_with_tool: true}\nsci: {layout: ring}\n",
          "3: field 'analysis.regions.mark_with_tool': not with sci: (the handle's button drives the interface); "
          "mark regions from the timeline or --region"},
