@@ -1,6 +1,7 @@
 // Anchored overlays (issue 7): the overlay kinds' syntax, the image's corners and the
 // tissue pose under a known homography (exact truth), and the draw list on a region
-// that leaves the picture and comes back (hidden while lost, back when found).
+// that leaves the picture and comes back (hidden while lost, back when found), with
+// the SCI after it taking its image box target from the tracked region (issue 8).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +11,7 @@
 #include "endotower/app/json_line.hpp"
 #include "endotower/app/log.hpp"
 #include "endotower/app/overlay_canvas.hpp"
+#include "endotower/sci/sci_stage.hpp"
 #include "endotower/vision/anchored_overlay.hpp"
 #include "endotower/vision/anchored_overlay_stage.hpp"
 #include "endotower/vision/region_stage.hpp"
@@ -166,6 +168,11 @@ TEST(AnchoredOverlayStage, HiddenWhileLostBackWhenFound) {
     const hal::FrameFormat format{640, 480, 640 * 3, hal::PixelFormat::kBgr24};
     regions.configure(format);
     anchored.configure(format);
+    // The SCI after them (issue 8): its image box target rides on the tracked region.
+    sci::SciStage sci_stage({}, nullptr, nullptr, nullptr, log);
+    sci_stage.set_camera(kCamera);
+    sci_stage.set_target_source(&anchored);
+    sci_stage.configure(format);
     app::OverlayCanvas canvas;
     canvas.configure(640, 480);
     app::JsonLine line;
@@ -182,7 +189,13 @@ TEST(AnchoredOverlayStage, HiddenWhileLostBackWhenFound) {
         app::AnalysisContext ctx{view(img, i), {}, canvas, line, 0};
         regions.process(ctx);
         anchored.process(ctx);
+        sci_stage.process(ctx);
         line.end_object();
+        Vec3 on_tissue;
+        if (anchored.target_mm(on_tissue)) {
+            EXPECT_DOUBLE_EQ(sci_stage.machine().box_target_mm().x, on_tissue.x);
+            EXPECT_DOUBLE_EQ(sci_stage.machine().box_target_mm().z, on_tissue.z);
+        }
         ASSERT_EQ(regions.estimates().size(), 2u);
         const bool image_tracked = regions.estimates()[0].state == RegionState::kTracked;
         const bool cube_tracked = regions.estimates()[1].state == RegionState::kTracked;
