@@ -12,8 +12,11 @@
 #include "endotower/app/status_badge.hpp"
 #include "endotower/calibration/calibration_stage.hpp"
 #include "endotower/calibration/undistorter.hpp"
+#include "endotower/gles/gles_renderer.hpp"
+#include "endotower/media/media_image.hpp"
 #include "endotower/media/media_library.hpp"
 #include "endotower/sci/sci_stage.hpp"
+#include "endotower/vision/anchored_overlay_stage.hpp"
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
@@ -37,6 +40,9 @@ struct AnalysisChain::Parts {
     calibration::Undistorter undistorter;
     std::optional<vision::RegionTracker> region_tracker;
     std::optional<vision::RegionStage> regions;
+    std::unique_ptr<hal::OverlayRenderer> anchor_renderer;  // its own context: own cache, slots
+    std::vector<std::unique_ptr<media::MediaImage>> anchor_images;  // lent to `anchored`
+    std::optional<vision::AnchoredOverlayStage> anchored;
     vision::GestureClassifier gesture_classifier;
     vision::ToolLikelihood gesture_tool_model;
     std::optional<vision::GestureSegmenter> gesture_segmenter;
@@ -131,6 +137,37 @@ std::function<vision::Point2(vision::Point2)> corrected_point(const calibration:
     };
 }
 
+// The image anchored to region `id` (analysis.regions.media / PATH): decoded now and
+// lent to the stage; a path that leads out of the folder (a symlink), or a missing or
+// corrupt file, is said on stderr and shown at the region instead. The video goes on.
+void load_anchor_image(const BoardConfig& b, int id, const std::string& path,
+                       AnalysisChain::AnchorImages& images, vision::AnchoredOverlayStage& stage,
+                       const char* command) {
+    std::string problem;
+    std::error_code ec;
+    const fs::path base = fs::weakly_canonical(b.region_media, ec);
+    const fs::path file = fs::weakly_canonical(fs::path(b.region_media) / path, ec);
+    const fs::path rel = file.lexically_relative(base);
+    auto image = std::make_unique<media::MediaImage>();
+    if (b.region_media.empty())
+        problem = "image not loaded: no media folder (analysis.regions.media)";
+    else if (ec || rel.empty() || *rel.begin() == "..")
+        problem = path + ": leads out of the media folder " + b.region_media;
+    else if (!media::load_media_image(file.string(), *image, problem))
+        problem = "image not loaded: " + problem;
+    if (problem.empty()) {
+        stage.set_image(id, image->view());
+        images.push_back(std::move(image));
+        return;
+    }
+    if (id < 0)
+        std::fprintf(stderr, "endotower %s: analysis.regions.overlay: %s\n", command,
+                     problem.c_str());
+    else
+        std::fprintf(stderr, "endotower %s: region %d: %s\n", command, id, problem.c_str());
+    stage.set_image_problem(id, problem.substr(0, 90));
+}
+
 }  // namespace
 
 AnalysisChain::AnalysisChain() : parts_(std::make_unique<Parts>()) {}
@@ -204,6 +241,36 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
             return best > 0;
         });
     }
+    vision::RegionOverlay tool_overlay;
+    vision::parse_region_overlay(board.region_overlay, tool_overlay, error);  // checked
+    p.regions->set_tool_overlay(tool_overlay);
+    // Anchored images and objects (issue 7) get a renderer of their own (the SCI's
+    // caches its standing menu; two scenes through one would redraw both every frame).
+    bool anchored = board.sci || (board.region_mark_with_tool &&
+                                  tool_overlay.kind != vision::RegionOverlayKind::kMarkers);
+    for (const vision::RegionMark& m : marks)
+        anchored = anchored || m.overlay.kind != vision::RegionOverlayKind::kMarkers;
+    if (any_regions && anchored) {
+        bool draws = tool_overlay.kind != vision::RegionOverlayKind::kMarkers;
+        for (const vision::RegionMark& m : marks)
+            draws = draws || m.overlay.kind != vision::RegionOverlayKind::kMarkers;
+        if (draws) {
+            std::string why;
+            p.anchor_renderer = gles::create_gles_renderer(why);
+            if (!p.anchor_renderer)
+                std::fprintf(stderr,
+                             "endotower %s: regions: no overlay renderer for anchored images "
+                             "and objects: %s\n",
+                             command, why.c_str());
+        }
+        p.anchored.emplace(*p.regions, p.anchor_renderer.get(), log, board.region_depth_mm);
+        for (const vision::RegionMark& m : marks)
+            if (m.overlay.kind == vision::RegionOverlayKind::kImage)
+                load_anchor_image(board, m.id, m.overlay.image, p.anchor_images, *p.anchored,
+                                  command);
+        if (tool_overlay.kind == vision::RegionOverlayKind::kImage)  // the board's, id -1
+            load_anchor_image(board, -1, tool_overlay.image, p.anchor_images, *p.anchored, command);
+    }
     for (vision::RegionMark& m : marks) p.regions->schedule(std::move(m));
 
     // Gestures (issue 6): a wrong or corrupt model disables them, never the video.
@@ -276,6 +343,10 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
     }
     if (gestures) p.chain.add(&*p.gesture_stage);
     if (any_regions) p.chain.add(&*p.regions);
+    if (any_regions && p.anchored) {
+        p.anchored->set_camera(camera);
+        p.chain.add(&*p.anchored);
+    }
 
     // The surgeon-computer interface, last: it reads the tools and the gesture.
     if (board.sci) {
@@ -294,6 +365,8 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
                       gestures ? &*p.gesture_stage : nullptr, renderer, log,
                       load_sci_media(board, renderer != nullptr, p.media, command));
         p.sci->set_camera(camera);
+        // The image box's target marker rides on the first tracked region (issue 8).
+        if (any_regions && p.anchored) p.sci->set_target_source(&*p.anchored);
         p.chain.add(&*p.sci);
     }
     return true;

@@ -4,8 +4,10 @@
 // status badge, the tool tracker (with the 3-D pose when the board's calibration
 // matches the input size), the strip markers, the gestures, the regions (marked from
 // the command line, the timeline, or with the tool tip: analysis.regions.mark_with_tool)
-// and the surgeon-computer interface (board `sci:`), in that order in one
-// app::StageChain.
+// then the images and cubes anchored to them (AnchoredOverlayStage, with a GLES
+// renderer of its own; analysis.regions.overlay or each mark's overlay), and the
+// surgeon-computer interface (board `sci:`; its image box target rides on the first
+// tracked region), in that order in one app::StageChain.
 //
 // build(): `input` is the size the analysis will see (for the calibration match);
 // `marks` are the regions to track (may be empty); `renderer` draws the SCI's overlay
@@ -27,6 +29,10 @@
 #include "endotower/hal/overlay_renderer.hpp"
 #include "endotower/vision/region_stage.hpp"
 
+namespace endotower::media {
+struct MediaImage;
+}
+
 namespace endotower::firmware {
 
 class AnalysisChain {
@@ -39,6 +45,8 @@ public:
     app::AnalysisStage* stage();
     // The region stage (its errors() after the run); valid after build().
     const vision::RegionStage& regions() const;
+
+    using AnchorImages = std::vector<std::unique_ptr<media::MediaImage>>;
 
 private:
     struct Parts;

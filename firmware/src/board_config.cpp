@@ -10,6 +10,7 @@
 
 #include "endotower/sci/sci_menu.hpp"
 #include "endotower/v4l2/capture_format.hpp"
+#include "endotower/vision/anchored_overlay.hpp"
 #include "endotower/vision/tool_tracker_factory.hpp"
 
 namespace endotower::firmware {
@@ -305,7 +306,10 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     if (const YAML::Node g = analysis ? analysis["regions"] : analysis) {
         if (!r.keys(g, "analysis.regions",
                     {"descriptor", "redetect_interval", "min_inliers", "detect_max_width",
-                     "propagate", "mark_with_tool"}) ||
+                     "propagate", "mark_with_tool", "overlay", "depth_mm", "media"}) ||
+            !r.text(g, "overlay", "analysis.regions.overlay", c.region_overlay) ||
+            !r.number(g, "depth_mm", "analysis.regions.depth_mm", 5, 500, c.region_depth_mm) ||
+            !r.confined(g, "media", "analysis.regions.media", c.region_media) ||
             !r.text(g, "descriptor", "analysis.regions.descriptor", c.region_descriptor) ||
             !r.integer(g, "redetect_interval", "analysis.regions.redetect_interval", 0, 1000,
                        c.region_redetect_interval) ||
@@ -381,12 +385,23 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
                 "not with sci: (the handle's button drives the interface); mark regions from the "
                 "timeline or --region");
     }
+    if (const YAML::Node g = analysis ? analysis["regions"] : analysis) {
+        vision::RegionOverlay overlay;
+        std::string why;
+        if (!vision::parse_region_overlay(c.region_overlay, overlay, why))
+            return r.fail(g["overlay"], "analysis.regions.overlay", why);
+        if (overlay.kind == vision::RegionOverlayKind::kImage && c.region_media.empty() &&
+            c.sci_media.empty())
+            return r.fail(g["overlay"], "analysis.regions.overlay",
+                          "an image needs a media folder (analysis.regions.media or sci.media)");
+    }
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
-    for (std::string* p :
-         {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace, &c.tool_model,
-          &c.calibration, &c.gesture_model, &c.storage, &c.sci_media, &c.sci_patient_record})
+    for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace,
+                           &c.tool_model, &c.calibration, &c.gesture_model, &c.storage,
+                           &c.sci_media, &c.sci_patient_record, &c.region_media})
         *p = resolve(base, *p);
+    if (c.region_media.empty()) c.region_media = c.sci_media;
     out = std::move(c);
     return true;
 }

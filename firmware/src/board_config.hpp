@@ -32,6 +32,12 @@ struct BoardConfig {
     int region_min_inliers = 10;
     int region_detect_max_width = 640;
     bool region_propagate = true;
+    // analysis.regions.overlay / depth_mm / media: what is anchored to each region
+    // ("markers" | "image:PATH" | "object:cube"; docs/regions.md), the tissue's depth
+    // when marked (the cube's scale), and the folder the images come from ("" = sci.media)
+    std::string region_overlay = "markers";
+    double region_depth_mm = 80;
+    std::string region_media;
 
     // calibration: the scope's calibration file (endotower calibrate), "" = none
     std::string calibration;

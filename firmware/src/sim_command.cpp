@@ -104,7 +104,9 @@ void print_sim_help() {
         "  --latency-ms MS  capture-to-present latency (default: one frame period)\n"
         "  --region POLY    track a tissue region marked on the first frame (its pixels),\n"
         "                   repeatable (ids 0, 1, ...; the timeline's 'region' marks follow);\n"
-        "                   the board's analysis.regions sets the method (docs/regions.md)\n"
+        "                   the board's analysis.regions sets the method (docs/regions.md);\n"
+        "                   a last item overlay=markers|image:PATH|object:cube anchors an\n"
+        "                   image (PATH in analysis.regions.media) or a cube to it\n"
         "  --loop N         play the input video N times in a row, time running on (a soak,\n"
         "                   toolchain/soak.sh); with only --trace, no video is written\n\n"
         "Command-line options override the board file. Exit status: 0 done, 1 failed\n"
@@ -172,13 +174,38 @@ int run_sim_command(const Args& args) {
         return usage_error("no output: give --out and/or --frames (or set sim.output)");
 
     std::vector<vision::RegionMark> marks;
-    for (const std::string& text : a.regions) {
+    // A region's overlay: its own overlay=KIND, else the board's analysis.regions.overlay.
+    vision::RegionOverlay board_overlay;
+    vision::parse_region_overlay(board.region_overlay, board_overlay, error);  // checked
+    auto region_overlay = [&](const std::string& kind, vision::RegionOverlay& out) {
+        if (kind.empty()) {
+            out = board_overlay;
+            return true;
+        }
+        if (!vision::parse_region_overlay(kind, out, error)) return false;
+        if (out.kind == vision::RegionOverlayKind::kImage && board.region_media.empty()) {
+            error = "overlay '" + kind + "': an image needs a media folder (analysis.regions.media or sci.media in " + a.board + ")";
+            return false;
+        }
+        return true;
+    };
+    for (const std::string& arg : a.regions) {
+        // "x1,y1 x2,y2 x3,y3 ... [overlay=KIND]"
+        std::string text = arg, kind;
+        const std::size_t at = text.find("overlay=");
+        if (at != std::string::npos) {
+            kind = text.substr(at + 8);
+            text.resize(at);
+            if (kind.empty() || kind.find(' ') != std::string::npos)
+                return usage_error("--region \"" + arg + "\": overlay=KIND must be the last item");
+        }
         std::vector<eval::Point2> poly;
         if (!eval::parse_polygon(text, poly, error))
-            return usage_error("--region \"" + text + "\": " + error);
+            return usage_error("--region \"" + arg + "\": " + error);
         if (poly.size() > vision::RegionEstimate::kMaxVertices)
-            return usage_error("--region \"" + text + "\": at most 16 vertices");
-        vision::RegionMark m{0, static_cast<int>(marks.size()), {}};
+            return usage_error("--region \"" + arg + "\": at most 16 vertices");
+        vision::RegionMark m{0, static_cast<int>(marks.size()), {}, {}};
+        if (!region_overlay(kind, m.overlay)) return usage_error("--region \"" + arg + "\": " + error);
         for (const eval::Point2& p : poly) m.polygon.push_back({p.x, p.y});
         marks.push_back(std::move(m));
     }
@@ -222,7 +249,11 @@ int run_sim_command(const Args& args) {
     // Timeline region marks: a time mark applies from the first frame at or after it.
     for (const sim::TimelineEntry& e : timeline.entries) {
         if (e.region.empty()) continue;
-        vision::RegionMark m{e.frame, static_cast<int>(marks.size()), {}};
+        vision::RegionMark m{e.frame, static_cast<int>(marks.size()), {}, {}};
+        if (!region_overlay(e.overlay, m.overlay)) {
+            std::fprintf(stderr, "endotower sim: %s:%d: %s\n", board.sim_events.c_str(), e.line, error.c_str());
+            return kExitBadInput;
+        }
         if (e.anchor == sim::TimelineEntry::Anchor::kTime)
             m.frame = static_cast<std::int64_t>(std::ceil(static_cast<double>(e.offset_ns) * fps / 1e9 - 1e-6));
         for (const sim::TimelinePoint& p : e.region) m.polygon.push_back({p.x, p.y});

@@ -18,6 +18,7 @@
 
 #include "alloc_counter.hpp"
 #include "endotower/gles/gles_renderer.hpp"
+#include "endotower/vision/anchored_overlay.hpp"
 
 namespace {
 
@@ -168,6 +169,96 @@ BENCHMARK(BM_RenderFullMenu1080p)
     ->Arg(0)
     ->Arg(1)
     ->Arg(2)
+    ->MeasureProcessCPUTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(3);
+
+// An overlay anchored to a tracked region (issue 7) at 1920x1080: the region (a 400x300
+// px box marked at the centre) turns by 0.5 degree and shifts by a pixel every frame, so
+// nothing is reused; per frame the geometry (anchored_image_corners, or tissue_pose and
+// anchored_cube) and the render + composite. Arg 0: a 512x384 image warped onto it;
+// arg 1: the cube standing on it. The added per-frame cost of an anchored overlay.
+void BM_AnchoredOverlay1080p(benchmark::State& state) {
+    constexpr int kW = 1920, kH = 1080;
+    std::string error;
+    auto renderer = gles::create_gles_renderer(error);
+    if (!renderer || !renderer->configure(kW, kH)) {
+        state.SkipWithError((renderer ? renderer->error() : error).c_str());
+        return;
+    }
+    std::vector<std::uint8_t> image(512 * 384 * 4);
+    for (std::size_t i = 0; i < image.size(); ++i) image[i] = std::uint8_t(i * 7 % 251);
+    for (std::size_t i = 3; i < image.size(); i += 4) image[i] = 255;
+    if (!renderer->set_image(0, {512, 384, 512 * 4, image.data()})) {
+        state.SkipWithError(renderer->error().c_str());
+        return;
+    }
+    vision::RegionEstimate e;
+    e.state = vision::RegionState::kTracked, e.vertices = 4;
+    e.marked = {{{760, 390}, {1160, 390}, {1160, 690}, {760, 690}}};
+    const hal::SceneCamera camera{.fx = 1400, .fy = 1400, .cx = 960, .cy = 540};
+    hal::OverlayScene scene;
+    scene.camera = camera;
+    const std::vector<std::uint8_t> clean(static_cast<std::size_t>(kW) * kH * 4, 0);
+    std::vector<std::uint8_t> px = clean;
+    hal::OverlayLayer layer;
+    layer.width = kW, layer.height = kH, layer.stride = 4 * kW, layer.rgba = px.data();
+    hal::DrawnRects drawn;
+    std::array<hal::Rgba8, 6> faces;
+    faces.fill({90, 200, 255, 220});
+    int frame = 0;
+    // Frame k's region: rotated about the box's centre, shifted; then the overlay.
+    auto anchored_frame = [&]() -> bool {
+        const int k = frame++ % 60;
+        const double a = k * 0.5 * 3.14159265 / 180, c = std::cos(a), s = std::sin(a);
+        e.homography = {c, -s, 960 - c * 960 + s * 540 + k, s, c, 540 - s * 960 - c * 540, 0, 0, 1};
+        scene.clear();
+        if (state.range(0) == 0) {
+            std::array<vision::Point2, 4> q{};
+            if (!vision::anchored_image_corners(e, 512, 384, q)) return false;
+            hal::SceneImage im;
+            im.warped = true;
+            for (std::size_t i = 0; i < 4; ++i)
+                im.corners[i] = {float(q[i].x + 0.5), float(q[i].y + 0.5)};
+            scene.images.add(im);
+        } else {
+            vision::TissuePose pose;
+            if (!vision::tissue_pose(e, camera, 80, pose)) return false;
+            scene.boxes.add(vision::anchored_cube(pose, faces));
+        }
+        return renderer->render(scene, layer, drawn);
+    };
+    for (int i = 0; i < 5; ++i) anchored_frame();  // warm up
+    std::vector<double> ms;
+    ms.reserve(100000);
+    std::int64_t frames = 0, allocs = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        std::copy(clean.begin(), clean.end(), px.begin());
+        state.ResumeTiming();
+        const std::int64_t a0 = bench::allocations();
+        const auto t0 = std::chrono::steady_clock::now();
+        if (!anchored_frame()) {
+            state.SkipWithError(renderer->error().c_str());
+            return;
+        }
+        const auto t1 = std::chrono::steady_clock::now();
+        allocs += bench::allocations() - a0;
+        ++frames;
+        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    std::int64_t area = 0;
+    for (std::size_t i = 0; i < drawn.count; ++i)
+        area += std::int64_t(drawn.rects[i].width) * drawn.rects[i].height;
+    state.counters["median_ms"] = ms[ms.size() / 2];
+    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+    state.counters["allocs_per_frame"] = double(allocs) / double(frames);
+    state.counters["rect_mpix"] = double(area) / 1e6;
+}
+BENCHMARK(BM_AnchoredOverlay1080p)
+    ->Arg(0)
+    ->Arg(1)
     ->MeasureProcessCPUTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(3);

@@ -57,7 +57,7 @@ Vec3d orientation_angles_deg(const Vec3d& d) {
 void ImageBox::reset() {
     position_ = {0, 0, kDepthMm};
     angles_ = {};
-    grabbed_ = false;
+    grabbed_ = placed_ = false;
 }
 
 void ImageBox::grab(const Vec3d& tip_mm, const Vec3d& axis_dir) {
@@ -66,6 +66,7 @@ void ImageBox::grab(const Vec3d& tip_mm, const Vec3d& axis_dir) {
     grab_position_ = position_;
     grab_box_angles_ = angles_;
     grabbed_ = true;
+    placed_ = false;
 }
 
 void ImageBox::follow(const Vec3d& tip_mm, const Vec3d& axis_dir) {
@@ -79,6 +80,7 @@ bool ImageBox::place(const Vec3d& target_mm, double tolerance_mm) {
     grabbed_ = false;
     if (norm(sub(position_, target_mm)) > tolerance_mm) return false;
     position_ = target_mm;
+    placed_ = true;
     return true;
 }
 

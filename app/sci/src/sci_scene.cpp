@@ -93,7 +93,7 @@ void record(const SciSceneInput& in, hal::OverlayScene& s) {
     }
 }
 
-void box(const SciMachine& m, const SciParams& p, const SciSceneInput& in, hal::OverlayScene& s) {
+void box(const SciMachine& m, const SciSceneInput& in, hal::OverlayScene& s) {
     if (!s.camera.valid()) {
         s.texts.add(text("Image box: no calibrated camera (board: calibration)",
                          static_cast<float>(in.width) / 2, static_cast<float>(in.height) / 2,
@@ -109,7 +109,7 @@ void box(const SciMachine& m, const SciParams& p, const SciSceneInput& in, hal::
         if (f == lit || lit == -2) b.faces[f] = kHighlight;
     s.boxes.add(b);
     // The target marker: three 10 mm axes (fig. 4.42).
-    const Vec3d t = p.box_target_mm;
+    const Vec3d t = m.box_target_mm();
     const hal::Rgba8 axes[3] = {{255, 60, 60, 230}, {60, 255, 60, 230}, {60, 120, 255, 230}};
     for (int a = 0; a < 3; ++a) {
         hal::SceneLine3 l;
@@ -175,7 +175,7 @@ void build_sci_scene(const SciMachine& m, const SciParams& p, const SciSceneInpu
             record(in, s);
             break;
         case MenuId::kBox:
-            box(m, p, in, s);
+            box(m, in, s);
             break;
         case MenuId::kSuture:
             suture(m, in, s);

@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "endotower/vision/anchored_overlay_stage.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
 #include "endotower/vision/gesture_stage.hpp"
 #include "endotower/vision/tool_tracking_stage.hpp"
@@ -97,6 +98,9 @@ void SciStage::process(app::AnalysisContext& ctx) {
     }
     // The cursor is the surest tool.
     if (f.tool_count == 2 && confidence[1] > confidence[0]) std::swap(f.tools[0], f.tools[1]);
+    vision::Vec3 target;
+    if (anchored_ != nullptr && anchored_->target_mm(target))
+        machine_.set_box_target({target.x, target.y, target.z});
     machine_.step(f);
 
     const SciMachine& m = machine_;

@@ -146,8 +146,15 @@ void RegionStage::mark_with_tool(app::AnalysisContext& ctx) {
     ctx.trace.end_object();
 }
 
+const RegionOverlay& RegionStage::overlay(int id) const {
+    for (const auto& [i, o] : overlays_)
+        if (i == id) return o;
+    return tool_overlay_;
+}
+
 void RegionStage::schedule(RegionMark mark) {
     next_id_ = std::max(next_id_, mark.id + 1);  // regions marked with the tool come after
+    overlays_.emplace_back(mark.id, mark.overlay);
     const auto at = std::upper_bound(
         pending_.begin() + static_cast<std::ptrdiff_t>(next_), pending_.end(), mark.frame,
         [](std::int64_t f, const RegionMark& m) { return f < m.frame; });
@@ -168,12 +175,15 @@ void RegionStage::process(app::AnalysisContext& ctx) {
             errors_.push_back("frame " + std::to_string(seq) + ": " + error);
     }
     if (tip_) mark_with_tool(ctx);
+    count_ = 0;
     if (tracker_.size() == 0) return;
     const std::size_t n = tracker_.track(ctx.frame, estimates_);
+    count_ = n;
     ctx.trace.begin_array("regions");
     for (std::size_t i = 0; i < n; ++i) {
         const RegionEstimate& e = estimates_[i];
-        if (e.state == RegionState::kTracked && ctx.overlay.width() > 0)
+        if (e.state == RegionState::kTracked && ctx.overlay.width() > 0 &&
+            overlay(e.id).kind == RegionOverlayKind::kMarkers)
             draw_region(ctx.overlay, e, thickness_);
         ctx.trace.begin_object().field("id", e.id).begin_array("polygon_px");
         for (std::size_t v = 0; v < e.vertices; ++v)

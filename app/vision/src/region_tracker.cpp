@@ -568,8 +568,11 @@ std::size_t RegionTracker::track(const hal::Frame& frame, std::span<RegionEstima
         e.inliers = r.inliers;
         e.keyframe_match = keyframe;
         e.vertices = r.polygon.size();
-        for (std::size_t i = 0; i < e.vertices; ++i)
+        for (std::size_t i = 0; i < e.vertices; ++i) {
             e.polygon[i] = {r.polygon[i].x, r.polygon[i].y};
+            e.marked[i] = {r.kf_polygon[i].x, r.kf_polygon[i].y};
+        }
+        for (int i = 0; i < 9; ++i) e.homography[static_cast<std::size_t>(i)] = r.homography.val[i];
     }
     // The next frame's window: kept while it holds every tracked region with room to
     // move, else redrawn around them.

@@ -103,14 +103,15 @@ void main() {
 }
 )";
 
-// Images: straight-alpha RGBA times the opacity (in v_colour.r).
-constexpr const char* kImageFs = R"(
-precision mediump float;
+// Images: straight-alpha RGBA times the opacity (in v_colour.r); the texture
+// coordinate is projective, uv / q with q in v_colour.b (1 for a rectangle, the
+// homography's for a warped quad: perspective-correct).
+constexpr const char* kImageFs = ENDOTOWER_HIGHP R"(
 uniform sampler2D u_tex;
 varying vec2 v_uv;
 varying vec4 v_colour;
 void main() {
-    vec4 c = texture2D(u_tex, v_uv);
+    vec4 c = texture2D(u_tex, v_uv / v_colour.b);
     float a = c.a * v_colour.r;
     gl_FragColor = vec4(c.rgb * a, a);
 }

@@ -258,16 +258,57 @@ public:
             !b_.image_present[static_cast<std::size_t>(im.image_id)] ||
             b_.images_used + 6 > b_.images.size())
             return;
+        if (im.warped) return warped_image(im);
         Bounds bounds;
         bounds.add(im.x, im.y);
         bounds.add(im.x + im.width, im.y + im.height);
         Bounds covered = bounds;
         if (!cover(covered)) return;
-        // The id rides in the colour's second channel (the shader reads only the first).
+        // The id rides in the colour's second channel, the projective q in the third
+        // (the shader samples at uv / q; 1 for a rectangle).
         const float colour[4] = {std::clamp(im.opacity, 0.f, 1.f), static_cast<float>(im.image_id),
-                                 0, 0};
+                                 1, 0};
         tex_quad(b_.images, b_.images_used, bounds.x0, bounds.y0, bounds.x1, bounds.y1, 0, 0, 1, 1,
                  colour);
+        close();
+    }
+
+    // Projective texture coordinates: with the diagonals meeting at c, a corner at
+    // distance d_i from c and its opposite at d_(i+2) get q_i = (d_i + d_(i+2)) / d_(i+2)
+    // and (u q, v q, q); interpolated linearly on screen and divided per fragment, they
+    // give exactly the homography that maps the image's corners onto the quad.
+    void warped_image(const hal::SceneImage& im) {
+        const auto& p = im.corners;
+        // Convex, either orientation: every turn the same sign.
+        int pos = 0, neg = 0;
+        for (int k = 0; k < 4; ++k) {
+            const hal::Vec2f a = p[k], b = p[(k + 1) % 4], c = p[(k + 2) % 4];
+            const float turn = (b.x - a.x) * (c.y - b.y) - (b.y - a.y) * (c.x - b.x);
+            pos += turn > 0, neg += turn < 0;
+        }
+        if (pos != 4 && neg != 4) return;
+        // Diagonals p0 + s (p2 - p0) and p1 + t (p3 - p1).
+        const float ax = p[2].x - p[0].x, ay = p[2].y - p[0].y;
+        const float bx = p[3].x - p[1].x, by = p[3].y - p[1].y;
+        const float den = ax * by - ay * bx;
+        const float s = ((p[1].x - p[0].x) * by - (p[1].y - p[0].y) * bx) / den;
+        const float t = ((p[1].x - p[0].x) * ay - (p[1].y - p[0].y) * ax) / den;
+        if (!(s > 0 && s < 1 && t > 0 && t < 1)) return;
+        // Distances to the crossing as fractions of each diagonal (the ratios are what count).
+        const float d[4] = {s, t, 1 - s, 1 - t};
+        Bounds bounds;
+        for (const hal::Vec2f& c : p) bounds.add(c.x, c.y);
+        if (!cover(bounds)) return;
+        constexpr float kU[4] = {0, 1, 1, 0}, kV[4] = {0, 0, 1, 1};
+        constexpr int kOrder[6] = {0, 1, 2, 0, 2, 3};
+        for (int k : kOrder) {
+            const float q = (d[k] + d[(k + 2) % 4]) / d[(k + 2) % 4];
+            TexVertex& v = b_.images[b_.images_used++];
+            v.x = p[k].x, v.y = p[k].y, v.u = kU[k] * q, v.v = kV[k] * q;
+            v.colour[0] = std::clamp(im.opacity, 0.f, 1.f);
+            v.colour[1] = static_cast<float>(im.image_id);
+            v.colour[2] = q, v.colour[3] = 0;
+        }
         close();
     }
 

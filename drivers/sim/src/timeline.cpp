@@ -144,6 +144,13 @@ bool parse_timeline(std::string_view text, std::string_view name, Timeline& out,
                         " (expected press, release, wheel or region)");
         } else if (kind == "region") {
             for (; !arg.empty(); arg = fields.next()) {
+                // A trailing overlay=KIND names what is anchored (checked by the caller).
+                if (arg.substr(0, 8) == "overlay=") {
+                    entry.overlay = std::string(arg.substr(8));
+                    if (!fields.next().empty())
+                        return fail("overlay=KIND must come after the region's vertices");
+                    break;
+                }
                 TimelinePoint v;
                 if (!parse_vertex(arg, v))
                     return fail("region vertex " + quoted(arg) + " must be x,y (two numbers)");

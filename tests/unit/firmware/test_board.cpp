@@ -76,6 +76,51 @@ TEST(Board, ValuesAndRelativePaths) {
     EXPECT_FALSE(b.fov_mask);
 }
 
+// analysis.regions.overlay / depth_mm / media (issue 7): values, the media folder
+// resolved against the board file (sci.media when not given), errors with FILE:LINE.
+TEST(Board, RegionOverlays) {
+    BoardConfig b;
+    std::string err;
+    const std::string p = write_board("overlay.yaml",
+                                      "board: t\n"
+                                      "analysis:\n"
+                                      "  regions: {overlay: 'image:liver.png', depth_mm: 60, media: m}\n");
+    ASSERT_TRUE(load_board(p, b, err)) << err;
+    EXPECT_EQ(b.region_overlay, "image:liver.png");
+    EXPECT_DOUBLE_EQ(b.region_depth_mm, 60);
+    EXPECT_EQ(b.region_media, (fs::path(p).parent_path() / "m").string());
+    const std::string q = write_board("overlay_sci.yaml",
+                                      "board: t\n"
+                                      "analysis:\n"
+                                      "  regions: {overlay: 'object:cube'}\n"
+                                      "sci: {media: media}\n");
+    ASSERT_TRUE(load_board(q, b, err)) << err;
+    EXPECT_DOUBLE_EQ(b.region_depth_mm, 80);  // the default: the image box's depth
+    EXPECT_EQ(b.region_media, (fs::path(q).parent_path() / "media").string());
+    const std::string bad = write_board("overlay_bad.yaml",
+                                        "board: t\n"
+                                        "analysis:\n"
+                                        "  regions:\n"
+                                        "    overlay: sticker\n");
+    EXPECT_FALSE(load_board(bad, b, err));
+    EXPECT_NE(err.find("overlay_bad.yaml:4: field 'analysis.regions.overlay'"), std::string::npos)
+        << err;
+    EXPECT_NE(err.find("expected markers, image:PATH or object:cube"), std::string::npos) << err;
+    const std::string no_media = write_board("overlay_no_media.yaml",
+                                             "board: t\n"
+                                             "analysis:\n"
+                                             "  regions: {overlay: 'image:a.png'}\n");
+    EXPECT_FALSE(load_board(no_media, b, err));
+    EXPECT_NE(err.find("overlay_no_media.yaml:3"), std::string::npos) << err;
+    EXPECT_NE(err.find("needs a media folder"), std::string::npos) << err;
+    const std::string escape = write_board("overlay_escape.yaml",
+                                           "board: t\n"
+                                           "analysis:\n"
+                                           "  regions: {media: ../../etc}\n");
+    EXPECT_FALSE(load_board(escape, b, err));
+    EXPECT_NE(err.find("leads out of the board file's directory"), std::string::npos) << err;
+}
+
 TEST(Board, CalibrationPathIsResolvedAgainstTheBoardFile) {
     const std::string p = write_board("cal.yaml", "board: t\ncalibration: scopes/olympus.json\n");
     BoardConfig b;
@@ -165,7 +210,7 @@ TEST(Board, ErrorsNameTheLineAndField) {
          "3: field 'analysis.regions.min_inliers': must be between 4 and 1000, got 2"},
         {"board: t\nanalysis:\n  regions:\n    redetect: 5\n",
          "4: field 'analysis.regions.redetect': unknown key (expected one of: descriptor, redetect_interval, "
-         "min_inliers, detect_max_width, propagate, mark_with_tool)"},
+         "min_inliers, detect_max_width, propagate, mark_with_tool, overlay, depth_mm, media)"},
         {"board: t\nanalysis:\n  regions: {mark_with_tool: true}\nsci: {layout: ring}\n",
          "3: field 'analysis.regions.mark_with_tool': not with sci: (the handle's button drives the interface); "
          "mark regions from the timeline or --region"},

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "endotower/sci/sci_functions.hpp"
+#include "endotower/sci/sci_machine.hpp"
 
 namespace endotower::sci {
 namespace {
@@ -64,6 +65,35 @@ TEST(ImageBox, PlacesOnTheTargetOnlyWithinTolerance) {
     far.follow({-20, 0, 60}, {0, 0, 1});
     EXPECT_FALSE(far.place({20, 10, 90}, 10));
     EXPECT_DOUBLE_EQ(far.position_mm().x, -20);
+}
+
+// Issue 8 with a tracked region: the target marker rides on the tissue, and a box placed
+// on it stays on it as the tissue moves, until it is grabbed again; a box released off
+// the target does not follow.
+TEST(ImageBox, PlacedBoxStaysOnAMovingTarget) {
+    SciMachine m;
+    m.set_box_target({-10, 5, 85});  // the region's centre on the tissue
+    EXPECT_DOUBLE_EQ(m.box_target_mm().x, -10);
+    EXPECT_DOUBLE_EQ(m.box().position_mm().z, ImageBox::kDepthMm);  // not placed: stays put
+    ImageBox box;
+    box.grab({0, 0, 60}, {0, 0, 1});
+    box.follow({-8, 3, 64}, {0, 0, 1});  // centre (-8, 3, 84): 3 mm from the target
+    ASSERT_TRUE(box.place({-10, 5, 85}, 10));
+    EXPECT_TRUE(box.placed());
+    box.stay_on({-4, 7, 95});  // the endoscope moved: the tissue is elsewhere now
+    EXPECT_DOUBLE_EQ(box.position_mm().x, -4);
+    EXPECT_DOUBLE_EQ(box.position_mm().y, 7);
+    EXPECT_DOUBLE_EQ(box.position_mm().z, 95);
+    box.grab({0, 0, 60}, {0, 0, 1});  // picked up again: no longer on the tissue
+    EXPECT_FALSE(box.placed());
+    box.stay_on({30, 30, 120});
+    EXPECT_DOUBLE_EQ(box.position_mm().x, -4);
+    ImageBox off;
+    off.grab({0, 0, 60}, {0, 0, 1});
+    off.follow({40, 0, 60}, {0, 0, 1});
+    EXPECT_FALSE(off.place({-10, 5, 85}, 10));
+    off.stay_on({-4, 7, 95});
+    EXPECT_DOUBLE_EQ(off.position_mm().x, 40);
 }
 
 TEST(ImageBox, FaceUnderAPixel) {

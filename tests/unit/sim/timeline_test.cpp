@@ -164,7 +164,24 @@ INSTANTIATE_TEST_SUITE_P(
         BadLine{"frame 3 region 1,2 3,4 nan,1", "region vertex 'nan,1' must be x,y (two numbers)"},
         BadLine{"frame 3 region 1,2 3,4 1e3,1", "region vertex '1e3,1' must be x,y (two numbers)"},
         BadLine{"t 1 region 0,0 1,0 2,0 3,0 4,0 5,0 6,0 7,0 8,0 9,0 10,0 11,0 12,0 13,0 14,0 15,0 16,0",
-                "a region has at most 16 vertices"}));
+                "a region has at most 16 vertices"},
+        BadLine{"frame 3 region 1,2 3,4 5,6 overlay=object:cube 7,8",
+                "overlay=KIND must come after the region's vertices"},
+        BadLine{"frame 3 region 1,2 3,4 overlay=markers",
+                "a region needs at least 3 vertices \"x1,y1 x2,y2 x3,y3\", got 2"}));
+
+TEST(Timeline, RegionOverlayIsKeptAsWritten) {
+    Timeline tl;
+    std::string error;
+    ASSERT_TRUE(parse_timeline("frame 3 region 1,2 30,4 5,60 overlay=image:ct/a.png\n"
+                               "frame 4 region 1,2 30,4 5,60\n",
+                               "e.txt", tl, error))
+        << error;
+    ASSERT_EQ(tl.entries.size(), 2u);
+    EXPECT_EQ(tl.entries[0].region.size(), 3u);
+    EXPECT_EQ(tl.entries[0].overlay, "image:ct/a.png");
+    EXPECT_EQ(tl.entries[1].overlay, "");
+}
 
 TEST(Timeline, RegionMarksCarryTheirPolygonAndAreNotHandleEvents) {
     Timeline tl;

@@ -84,6 +84,123 @@ TEST_P(T65Suite, GoodInEveryFrame) {
 
 INSTANTIATE_TEST_SUITE_P(Emulated, T65Suite, ::testing::Range(1, 7));
 
+// A board whose regions anchor an image from media/ (a 64x48 PNG written here).
+fs::path image_board(const fs::path& dir) {
+    fs::create_directories(dir / "media");
+    cv::Mat img(48, 64, CV_8UC3, cv::Scalar(40, 200, 240));
+    img(cv::Rect(0, 0, 32, 24)).setTo(cv::Scalar(255, 0, 0));
+    cv::imwrite((dir / "media/logo.png").string(), img);
+    const fs::path b = dir / "board_image.yaml";
+    std::ofstream(b) << "board: regions_test\nanalysis:\n  stage: none\n  tracker: none\n"
+                        "  regions: {media: media}\n";
+    return b;
+}
+
+class T65AnchoredImage : public ::testing::TestWithParam<int> {};
+
+// An image anchored to the region on table 6.5's emulated changes: shown on every frame
+// (the region is tracked on all), and its corners, against the truth's homography
+// (H_from_first) applied to the image fitted into the marked box, within the region
+// tracker's bounds: GOOD's 0.10 x sqrt(region area) on every frame, <= 3 px mean.
+TEST_P(T65AnchoredImage, CornersFollowTheTruth) {
+    const std::string n = std::to_string(GetParam());
+    const fs::path dir = temp_dir("anchored_" + n);
+    const CommandRun scene =
+        run("scene --scenario " ENDOTOWER_SOURCE_DIR "/board/sim/scenarios/t65_emulated_" + n +
+            ".yaml --out " + (dir / "scene").string());
+    ASSERT_EQ(scene.status, 0) << scene.output;
+    const auto truth = read_lines(dir / "scene/truth.jsonl");
+    std::string region;
+    double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+    for (const auto& v : truth.at(0)["regions"][0]["polygon_px"]) {
+        const double x = v[0].get<double>(), y = v[1].get<double>();
+        region += (region.empty() ? "" : " ") + std::to_string(x) + "," + std::to_string(y);
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+    const CommandRun sim =
+        run("sim --board " + image_board(dir).string() + " --input " +
+            (dir / "scene/frames").string() + " --out " + (dir / "o.avi").string() + " --trace " +
+            (dir / "trace.jsonl").string() + " --region " + quote(region + " overlay=image:logo.png"));
+    ASSERT_EQ(sim.status, 0) << sim.output;
+    // The 64x48 image fitted (aspect kept, centred) into the marked box.
+    const double scale = std::min((x1 - x0) / 64, (y1 - y0) / 48);
+    const double l = x0 + (x1 - x0 - 64 * scale) / 2, t = y0 + (y1 - y0 - 48 * scale) / 2;
+    const double fx[4] = {l, l + 64 * scale, l + 64 * scale, l};
+    const double fy[4] = {t, t, t + 48 * scale, t + 48 * scale};
+    const auto trace = read_lines(dir / "trace.jsonl");
+    ASSERT_EQ(trace.size(), truth.size());
+    double sum = 0;
+    for (std::size_t f = 0; f < trace.size(); ++f) {
+        const auto& a = trace[f]["anchored"].at(0);
+        ASSERT_EQ(a["kind"], "image");
+        ASSERT_TRUE(a["shown"].get<bool>()) << "frame " << f;
+        const auto& tr = truth[f]["regions"][0];
+        const auto h = tr["H_from_first"].get<std::vector<double>>();
+        double area = 0;
+        const auto& poly = tr["polygon_px"];
+        for (std::size_t i = 0; i < poly.size(); ++i) {
+            const auto &p = poly[i], &q = poly[(i + 1) % poly.size()];
+            area += p[0].get<double>() * q[1].get<double>() - q[0].get<double>() * p[1].get<double>();
+        }
+        double err = 0;
+        for (int k = 0; k < 4; ++k) {
+            const double w = h[6] * fx[k] + h[7] * fy[k] + h[8];
+            const double u = (h[0] * fx[k] + h[1] * fy[k] + h[2]) / w;
+            const double v = (h[3] * fx[k] + h[4] * fy[k] + h[5]) / w;
+            err += std::hypot(a["corners_px"][k][0].get<double>() - u,
+                              a["corners_px"][k][1].get<double>() - v) / 4;
+        }
+        EXPECT_LE(err, 0.10 * std::sqrt(std::abs(area) / 2)) << "frame " << f;
+        sum += err;
+    }
+    const double mean = sum / static_cast<double>(trace.size());
+    EXPECT_LE(mean, 3.0);
+    std::printf("t65_emulated_%s: anchored image mean corner error %.2f px\n", n.c_str(), mean);
+    fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Emulated, T65AnchoredImage, ::testing::Range(1, 7));
+
+// Overlay input: a bad kind or a path out of the media folder is bad usage (exit 2, the
+// option named); a missing image is said on stderr and the video goes on (exit 0).
+TEST(RegionsCommand, AnchoredOverlayInput) {
+    const fs::path dir = temp_dir("overlay_input");
+    const cv::Mat a = test::texture(640, 480, 21);
+    fs::create_directories(dir / "in");
+    cv::imwrite((dir / "in/000000.png").string(), a);
+    cv::imwrite((dir / "in/000001.png").string(), a);
+    const std::string sim = "sim --board " + image_board(dir).string() + " --input " +
+                            (dir / "in").string() + " --frames " + (dir / "out").string() +
+                            " --trace " + (dir / "t.jsonl").string() + " --region ";
+    const std::string poly = "220,160 420,170 410,330 230,320";
+    CommandRun r = run(sim + quote(poly + " overlay=sticker"));
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("expected markers, image:PATH or object:cube"), std::string::npos)
+        << r.output;
+    r = run(sim + quote(poly + " overlay=image:../secret.png"));
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("inside the media folder"), std::string::npos) << r.output;
+    r = run(sim + quote(poly + " overlay=image:missing.png"));
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("region 0: image not loaded"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("missing.png"), std::string::npos) << r.output;
+    const auto lines = read_lines(dir / "t.jsonl");
+    ASSERT_EQ(lines.size(), 2u);
+    EXPECT_FALSE(lines[1]["anchored"][0]["shown"].get<bool>());
+    // An object without a calibration: the message instead, the video goes on.
+    r = run(sim + quote(poly + " overlay=object:cube"));
+    EXPECT_EQ(r.status, 0) << r.output;
+    // A timeline mark's overlay is checked with its file and line.
+    std::ofstream(dir / "events.txt") << "# marks\nframe 1 region " << poly
+                                      << " overlay=object:teapot\n";
+    r = run(sim + quote(poly) + " --events " + (dir / "events.txt").string());
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_NE(r.output.find("events.txt:2: overlay 'object:teapot': unknown object 'teapot'"),
+              std::string::npos)
+        << r.output;
+    fs::remove_all(dir);
+}
+
 // A directory of two images of different sizes: the second is the first scaled by
 // 1.25 and shifted. The trace reports the region in the second image's own pixels;
 // eval scores it against the known homography.

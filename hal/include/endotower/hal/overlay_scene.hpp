@@ -67,10 +67,15 @@ struct SceneText {
     Align align = Align::kTopLeft;
     Rgba8 colour;
 };
-// An image registered with OverlayRenderer::set_image, scaled into the rectangle.
+// An image registered with OverlayRenderer::set_image, scaled into the rectangle; or,
+// `warped`, mapped perspective-correctly onto the convex quadrilateral `corners` (pixel
+// edges; the image's top-left, top-right, bottom-right, bottom-left), x..height unused:
+// an image anchored to tissue moved by a homography. A non-convex quad is not drawn.
 struct SceneImage {
     int image_id = 0;
     float x = 0, y = 0, width = 0, height = 0, opacity = 1;
+    bool warped = false;
+    std::array<Vec2f, 4> corners{};
 };
 // A cube of edge `size_mm`: camera-from-model transform, column-major 4x4 (mm).
 // Faces in the order +x, -x, +y, -y, +z, -z.

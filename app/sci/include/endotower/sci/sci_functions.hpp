@@ -6,7 +6,9 @@
 // deltas since then (eq. 4.33): position = p_o + (T_n - T_o), angles = a_o + (R_n - R_o),
 // R = (alpha, beta, gamma) the angles of the tool's axis with the YZ, XZ and XY planes
 // (eq. 4.34). The cube's rotation is Rz(gamma) Ry(beta) Rx(alpha). place() drops it on
-// a target marker when its centre is within `tolerance_mm` (fig. 4.42d: snapped on).
+// a target marker when its centre is within `tolerance_mm` (fig. 4.42d: snapped on);
+// a placed box then stays on its target: stay_on() moves it with a target anchored to
+// tissue (a tracked region, issue 7) until it is grabbed again.
 // face_under() is the visible face whose projection holds a pixel (the nearest one).
 //
 // SutureThread: a thread of kNodes point masses joined by springs, its two ends pinned
@@ -36,6 +38,10 @@ public:
     void follow(const Vec3d& tip_mm, const Vec3d& axis_dir);
     bool place(const Vec3d& target_mm, double tolerance_mm);  // true: snapped onto it
     void release() { grabbed_ = false; }
+    void stay_on(const Vec3d& target_mm) {
+        if (placed_) position_ = target_mm;
+    }
+    bool placed() const { return placed_; }
 
     bool grabbed() const { return grabbed_; }
     const Vec3d& position_mm() const { return position_; }
@@ -47,7 +53,7 @@ public:
 private:
     Vec3d position_{0, 0, kDepthMm}, angles_;
     Vec3d grab_tip_, grab_angles_, grab_position_, grab_box_angles_;
-    bool grabbed_ = false;
+    bool grabbed_ = false, placed_ = false;
 };
 
 struct SutureParams {

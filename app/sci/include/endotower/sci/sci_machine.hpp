@@ -91,6 +91,13 @@ public:
     bool suture_started() const { return suture_started_; }
     int box_face() const { return box_face_; }  // the face under the tip, or -1
     void set_camera(const hal::SceneCamera& c) { camera_ = c; }
+    // The image box's target marker this frame (default SciParams::box_target_mm); a box
+    // placed on it moves with it (a target anchored to a tracked region, issue 8).
+    void set_box_target(const Vec3d& target_mm) {
+        params_.box_target_mm = target_mm;
+        box_.stay_on(target_mm);
+    }
+    const Vec3d& box_target_mm() const { return params_.box_target_mm; }
 
 private:
     void go(SciState s) { state_ = s; }

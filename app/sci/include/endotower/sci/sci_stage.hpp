@@ -29,6 +29,7 @@
 namespace endotower::vision {
 class ToolTrackingStage;
 class GestureStage;
+class AnchoredOverlayStage;
 }  // namespace endotower::vision
 
 namespace endotower::sci {
@@ -55,6 +56,10 @@ public:
     void process(app::AnalysisContext& ctx) override;
     // The calibrated pinhole of the input image (the image box, the 3-D thread).
     void set_camera(const hal::SceneCamera& camera) { scene_.camera = camera; }
+    // The image box's target marker follows the tissue point of the first tracked
+    // region of `anchored` (borrowed; it runs before this stage); while none is tracked
+    // it stays where it was last (issue 8, fig. 4.41/4.42).
+    void set_target_source(const vision::AnchoredOverlayStage* anchored) { anchored_ = anchored; }
     const SciMachine& machine() const { return machine_; }
     const hal::OverlayScene& scene() const { return scene_; }
 
@@ -63,6 +68,7 @@ private:
     SciParams params_;
     const vision::ToolTrackingStage* tracking_;
     const vision::GestureStage* gestures_;
+    const vision::AnchoredOverlayStage* anchored_ = nullptr;
     hal::OverlayRenderer* renderer_;
     app::Log& log_;
     SciMedia media_;

@@ -65,6 +65,11 @@ struct RegionEstimate {
     std::size_t vertices = 0;
     int inliers = 0;              // features agreeing with the homography this frame
     bool keyframe_match = false;  // this frame's estimate came from keyframe matching
+    // The polygon as marked (the marking frame's pixels) and the region's homography from
+    // the marking frame to this one, row-major (eq. 6.4; the last known while lost): what
+    // an anchored overlay is moved by. `polygon` may bend away from it (see track()).
+    std::array<Point2, kMaxVertices> marked{};
+    std::array<double, 9> homography{1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
 
 class RegionTracker {

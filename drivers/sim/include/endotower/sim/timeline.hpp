@@ -7,6 +7,8 @@
 //   t 2.0      press 1            button 1
 //   frame 30   region 100,80 220,84 210,190 96,180
 //                                 marks a tissue region (polygon in that frame's pixels)
+//   frame 40   region 10,10 90,10 90,70 overlay=image:logo.png
+//                                 ... with an anchored overlay (docs/regions.md)
 //
 // "frame N" or "t SECONDS" (>= 0), then press|release [BUTTON 0-7] or wheel DELTA
 // (non-zero integer, -1000..1000) or region X,Y X,Y X,Y ... (3 to 16 vertices, finite
@@ -32,6 +34,7 @@ struct TimelineEntry {
     hal::Nanos offset_ns = 0;   // with kTime, from the first frame's capture
     hal::ControlEvent event{};  // time_ns is filled when the timeline is scheduled
     std::vector<TimelinePoint> region;  // a region mark when not empty (event unused)
+    std::string overlay;                // the region's overlay=KIND text, "" = not given
     int line = 0;               // 1-based line in the file, for messages
 };
 
