@@ -72,7 +72,8 @@ hal::OverlayScene full_menu(float shift) {
                  .width = 560,
                  .height = 200,
                  .corner_px = 10,
-                 .fill = {0, 0, 0, 140}});
+                 .fill = {0, 0, 0, 140},
+                 .border = {}});
     text("Patient: Anna Muller  ID 0042", 420 + shift, 60, 28, hal::SceneText::Align::kTopLeft);
     text("Born 1971-04-02  Cholecystectomy", 420 + shift, 110, 28, hal::SceneText::Align::kTopLeft);
     text("Notes: allergic to latex", 420 + shift, 160, 28, hal::SceneText::Align::kTopLeft);

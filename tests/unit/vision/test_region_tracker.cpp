@@ -113,7 +113,7 @@ TEST(RegionTracker, LostWhenTheRegionLeavesThePictureAndRecoveredWhenItReturns) 
     auto frame_at = [&](int x) { return scene(cv::Rect(x, 0, 640, 480)).clone(); };
     RegionTracker t;
     RegionStage stage(t);
-    stage.schedule({0, 5, kSquare});
+    stage.schedule({0, 5, kSquare, {}});
     stage.configure({640, 480, 640 * 3, hal::PixelFormat::kBgr24});
     app::OverlayCanvas canvas;
     canvas.configure(640, 480);
