@@ -43,7 +43,7 @@ if [ ${#missing[@]} -gt 0 ]; then
   "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-want="2 ${target_packages[*]}"  # bump the leading number when the unpacking changes
+want="3 ${target_packages[*]}"  # bump the leading number when the unpacking changes
 if [ -f "$sysroot/.endotower-packages" ] && [ "$(cat "$sysroot/.endotower-packages")" = "$want" ]; then
   exit 0
 fi
@@ -71,6 +71,12 @@ for so in libblas.so.3 liblapack.so.3; do
   for impl in "$lib"/*/"$so"; do
     [ -e "$impl" ] && [ ! -e "$lib/$so" ] && ln -s "${impl#"$lib"/}" "$lib/$so"
   done
+done
+# Absolute symlinks (e.g. libz.so -> /lib/aarch64-linux-gnu/libz.so.1.2.13) would point
+# into the host: make them relative, inside the sysroot.
+find "$sysroot" -type l -lname '/*' -print0 | while IFS= read -r -d '' link; do
+  target=$(readlink "$link")
+  ln -sfn "$(realpath -m --relative-to="$(dirname "$link")" "$sysroot$target")" "$link"
 done
 echo "$want" >"$sysroot/.endotower-packages"
 echo "endotower: arm64 sysroot ready: $sysroot ($(du -sh "$sysroot" | cut -f1))" >&2
