@@ -39,7 +39,11 @@ void draw_vessels(Rng& rng, cv::Mat& mask, double texel, double amount) {
     const double area = mask.cols * texel * mask.rows * texel;
     const int count = static_cast<int>(amount * area / 500.0);
     for (int v = 0; v < count; ++v) {
-        cv::Point2d p(rng.uniform(0, mask.cols), rng.uniform(0, mask.rows));
+        // One draw per statement: the order of a call's arguments is unspecified (GCC
+        // evaluates them right to left on x86-64, left to right on arm64), and the
+        // texture must not depend on the target. y first keeps the x86 textures.
+        const double py = rng.uniform(0, mask.rows);
+        cv::Point2d p(rng.uniform(0, mask.cols), py);
         double dir = rng.uniform(0, 2 * M_PI);
         double width_mm = rng.uniform(0.25, 1.1);
         const int steps = static_cast<int>(rng.uniform(30, 110));
@@ -81,12 +85,14 @@ bool TissueTexture::generate(const TissueSpec& spec, double u0, double v0, doubl
     cv::Mat blood = cv::Mat::zeros(h, w, CV_32F);
     const int stains = static_cast<int>(spec.blood * w * texel * h * texel / 600.0);
     for (int i = 0; i < stains; ++i) {
-        const cv::Point c(static_cast<int>(rng.uniform(0, w)), static_cast<int>(rng.uniform(0, h)));
+        // One draw per statement, in the order x86-64 evaluated them (see draw_vessels).
+        const int cy = static_cast<int>(rng.uniform(0, h));
+        const cv::Point c(static_cast<int>(rng.uniform(0, w)), cy);
         const double r = rng.uniform(1.0, 7.0) / texel;
-        cv::ellipse(
-            blood, c,
-            cv::Size(std::max(1, cvRound(r)), std::max(1, cvRound(r * rng.uniform(0.4, 1.0)))),
-            rng.uniform(0, 180), 0, 360, cv::Scalar(1.0), -1, cv::LINE_AA);
+        const double angle = rng.uniform(0, 180);
+        const double aspect = rng.uniform(0.4, 1.0);
+        cv::ellipse(blood, c, cv::Size(std::max(1, cvRound(r)), std::max(1, cvRound(r * aspect))),
+                    angle, 0, 360, cv::Scalar(1.0), -1, cv::LINE_AA);
     }
     cv::GaussianBlur(blood, blood, cv::Size(0, 0), std::max(0.7, 0.8 / texel));
 
