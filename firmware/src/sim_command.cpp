@@ -3,6 +3,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -215,6 +216,23 @@ int run_sim_command(const Args& args) {
         std::fprintf(stderr, "endotower sim: %s\n", error.c_str());
         return kExitBadInput;
     }
+    hal::Nanos wall_watchdog_ns = 0;
+    // The replay's wall-clock watchdog on a stage call (default 2 s) can be raised where
+    // the CPU is emulated: toolchain/cross-test.sh runs the tests under qemu-user, 10-30x
+    // slower, where a slow stage is not a hung one. Not a board key: it says what the
+    // host is, not what the appliance does.
+    if (const char* w = std::getenv("ENDOTOWER_REPLAY_WATCHDOG_MS"); w != nullptr) {
+        char* end = nullptr;
+        const long ms = std::strtol(w, &end, 10);
+        if (end == w || *end != '\0' || ms < 1 || ms > 3600000) {
+            std::fprintf(stderr,
+                         "endotower sim: ENDOTOWER_REPLAY_WATCHDOG_MS='%s': expected "
+                         "milliseconds, 1..3600000\n",
+                         w);
+            return kExitBadInput;
+        }
+        wall_watchdog_ns = static_cast<hal::Nanos>(ms) * hal::kMillisecond;
+    }
     if (!board.sim_output.empty()) {
         const std::string ext = fs::path(board.sim_output).extension().string();
         if (ext != ".mkv" && ext != ".avi" && ext != ".mp4")
@@ -292,6 +310,7 @@ int run_sim_command(const Args& args) {
     cfg.analysis_virtual_cost_ns = static_cast<hal::Nanos>(board.analysis_virtual_cost_ms * 1e6);
     cfg.max_overlay_age = board.max_overlay_age;
     cfg.late_tolerance_ns = static_cast<hal::Nanos>(board.late_tolerance_ms * 1e6);
+    if (wall_watchdog_ns > 0) cfg.analysis_wall_timeout_ns = wall_watchdog_ns;
     // Wake at the due time, not up to 50 us after it (the default timer slack).
     if (board.sim_realtime) system::tighten_timer_slack();
 

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -343,6 +344,21 @@ TEST(Cli, BadInputIsNamedWithExitCode2) {
         EXPECT_EQ(r.status, 2) << c.args << "\n" << r.output;
         EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
     }
+    // The replay watchdog's override (toolchain/cross-test.sh sets it) is checked like an
+    // option; the value CI may have set is restored after.
+    const char* prior = std::getenv("ENDOTOWER_REPLAY_WATCHDOG_MS");
+    const std::string saved = prior != nullptr ? prior : "";
+    for (const char* bad : {"2s", "0", ""}) {
+        ::setenv("ENDOTOWER_REPLAY_WATCHDOG_MS", bad, 1);
+        const CommandResult r = run(kBoard + out);
+        EXPECT_EQ(r.status, 2) << bad << "\n" << r.output;
+        EXPECT_NE(r.output.find(std::string("ENDOTOWER_REPLAY_WATCHDOG_MS='") + bad +
+                                "': expected milliseconds"),
+                  std::string::npos)
+            << r.output;
+    }
+    if (prior != nullptr) ::setenv("ENDOTOWER_REPLAY_WATCHDOG_MS", saved.c_str(), 1);
+    else ::unsetenv("ENDOTOWER_REPLAY_WATCHDOG_MS");
     EXPECT_FALSE(fs::exists(d / "o.mkv"));
 }
 
