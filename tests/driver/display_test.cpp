@@ -239,9 +239,9 @@ TEST_F(DisplayTest, FrameAndOverlayReadBackThroughWriteback) {
     EXPECT_EQ(px_at(wb, stride, 100, 80)[2], 0);
     // Half blue over the frame: blue ~ 128 + under * (1 - a), green ~ under * (1 - a).
     const std::uint8_t* p = px_at(wb, stride, 705, 505);
-    EXPECT_NEAR(p[1], (505 - oy) % 256 * 127 / 255, 2);
-    EXPECT_NEAR(p[0], 128 + (705 - ox) % 256 * 127 / 255, 2);
-    EXPECT_NEAR(p[2], 77 * 127 / 255, 2);
+    EXPECT_NEAR(p[1], (505 - oy) % 256 * 127 / 255.0, 2);
+    EXPECT_NEAR(p[0], 128 + (705 - ox) % 256 * 127 / 255.0, 2);
+    EXPECT_NEAR(p[2], 77 * 127 / 255.0, 2);
 }
 
 // The copy path converts YUYV: limited-range white and black.

@@ -1,8 +1,6 @@
 // End-to-end: the `endotower sim` command on recordings, checked frame by frame.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
-#include "endotower_command.hpp"
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -10,23 +8,27 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
-#include <sys/wait.h>
 
 #include "endotower/app/trace_reader.hpp"
+#include "endotower_command.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
 using CommandResult = endotower::test::CommandRun;
-CommandResult run(const std::string& args) { return endotower::test::run_endotower(args); }
+CommandResult run(const std::string& args) {
+    return endotower::test::run_endotower(args);
+}
 
 fs::path fresh_dir(const std::string& name) {
     // Per process: several checkouts may run the suite at once on one machine.
-    const fs::path d = fs::temp_directory_path() / ("endotower_replay_" + name + "_" + std::to_string(::getpid()));
+    fs::path d =
+        fs::temp_directory_path() / ("endotower_replay_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -39,8 +41,9 @@ void write_frames(const fs::path& dir, int n, int w, int h) {
         cv::Mat m(h, w, CV_8UC3);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x)
-                m.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(x + i), static_cast<uchar>(y * 2 + i),
-                                                  static_cast<uchar>((x ^ y) + 3 * i));
+                m.at<cv::Vec3b>(y, x) =
+                    cv::Vec3b(static_cast<uchar>(x + i), static_cast<uchar>(y * 2 + i),
+                              static_cast<uchar>((x ^ y) + 3 * i));
         cv::imwrite((dir / (std::to_string(i) + ".png")).string(), m);
     }
 }
@@ -64,20 +67,23 @@ std::vector<endotower::app::TraceRecord> load(const fs::path& p) {
     return recs;
 }
 
-const std::string kBoard = std::string("sim --board ") + ENDOTOWER_SOURCE_DIR + "/board/sim/board.yaml ";
+const std::string kBoard =
+    std::string("sim --board ") + ENDOTOWER_SOURCE_DIR + "/board/sim/board.yaml ";
 
 // The shipped board without the tool tracker: only the status badge draws, so the
 // rest of the picture must pass through untouched.
 std::string badge_only_board(const fs::path& dir) {
-    std::ofstream(dir / "badge.yaml") << "board: t\nanalysis: {stage: status_badge, tracker: none}\n";
+    std::ofstream(dir / "badge.yaml")
+        << "board: t\nanalysis: {stage: status_badge, tracker: none}\n";
     return "sim --board " + (dir / "badge.yaml").string() + " ";
 }
 
 TEST(Replay, EveryFrameOutInOrderWithTheConfiguredLatencyAndExactPassthrough) {
     const fs::path d = fresh_dir("order");
     write_frames(d / "in", 40, 640, 480);
-    const CommandResult r = run(badge_only_board(d) + "--input " + (d / "in").string() + " --frames " + (d / "out").string() +
-                      " --trace " + (d / "trace.jsonl").string() + " --latency-ms 50 --out ''");
+    const CommandResult r = run(badge_only_board(d) + "--input " + (d / "in").string() +
+                                " --frames " + (d / "out").string() + " --trace " +
+                                (d / "trace.jsonl").string() + " --latency-ms 50 --out ''");
     ASSERT_EQ(r.status, 0) << r.output;
     const auto recs = load(d / "trace.jsonl");
     ASSERT_EQ(recs.size(), 40u);
@@ -108,8 +114,9 @@ TEST(Replay, WithoutAnalysisTheOutputIsTheInputBitForBit) {
     const fs::path d = fresh_dir("exact");
     write_frames(d / "in", 10, 160, 120);
     std::ofstream(d / "board.yaml") << "board: t\nanalysis: {stage: none}\n";
-    const CommandResult r = run("sim --board " + (d / "board.yaml").string() + " --input " + (d / "in").string() +
-                      " --frames " + (d / "out").string() + " --out " + (d / "out.mkv").string());
+    const CommandResult r =
+        run("sim --board " + (d / "board.yaml").string() + " --input " + (d / "in").string() +
+            " --frames " + (d / "out").string() + " --out " + (d / "out.mkv").string());
     ASSERT_EQ(r.status, 0) << r.output;
     cv::VideoCapture cap((d / "out.mkv").string());
     for (int i = 0; i < 10; ++i) {
@@ -129,22 +136,25 @@ TEST(Replay, DeterministicReplayIsIdenticalRunToRun) {
     std::string traces[2];
     for (int k = 0; k < 2; ++k) {
         const fs::path o = d / std::to_string(k);
-        const CommandResult r = run(kBoard + "--frames " + o.string() + " --trace " + (o / "t.jsonl").string() +
-                          " --out ''");
+        const CommandResult r = run(kBoard + "--frames " + o.string() + " --trace " +
+                                    (o / "t.jsonl").string() + " --out ''");
         ASSERT_EQ(r.status, 0) << r.output;
         // Wall-clock stage timings are measurements; everything else must match.
         for (auto& t : load(o / "t.jsonl"))
             traces[k] += std::to_string(t.frame) + " " + std::to_string(t.capture_ns) + " " +
-                         std::to_string(t.present_ns) + " " + std::to_string(t.analysis_age.value_or(-1)) +
-                         " " + std::to_string(t.input.size()) + " " + t.extra + "\n";
+                         std::to_string(t.present_ns) + " " +
+                         std::to_string(t.analysis_age.value_or(-1)) + " " +
+                         std::to_string(t.input.size()) + " " + t.extra + "\n";
     }
     EXPECT_EQ(traces[0], traces[1]);
     int frames = 0;
     for (const auto& e : fs::directory_iterator(d / "0")) {
         if (e.path().extension() != ".png") continue;
         ++frames;
-        std::ifstream a(e.path(), std::ios::binary), b(d / "1" / e.path().filename(), std::ios::binary);
-        const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+        std::ifstream a(e.path(), std::ios::binary),
+            b(d / "1" / e.path().filename(), std::ios::binary);
+        const std::string sa((std::istreambuf_iterator<char>(a)), {}),
+            sb((std::istreambuf_iterator<char>(b)), {});
         ASSERT_EQ(sa, sb) << e.path().filename();
     }
     EXPECT_EQ(frames, 180);
@@ -152,11 +162,13 @@ TEST(Replay, DeterministicReplayIsIdenticalRunToRun) {
 
 TEST(Replay, BundledRecordingWithTimeline) {
     const fs::path d = fresh_dir("bundled");
-    const CommandResult r = run(kBoard + "--out " + (d / "out.mkv").string() + " --trace " + (d / "t.jsonl").string());
+    const CommandResult r =
+        run(kBoard + "--out " + (d / "out.mkv").string() + " --trace " + (d / "t.jsonl").string());
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("180 frames in, 180 out, 0 late"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("target 33.333 ms; min 33.333, median 33.333, p99 33.333, max 33.333 ms"),
-              std::string::npos)
+    EXPECT_NE(
+        r.output.find("target 33.333 ms; min 33.333, median 33.333, p99 33.333, max 33.333 ms"),
+        std::string::npos)
         << r.output;
     const auto recs = load(d / "t.jsonl");
     ASSERT_EQ(recs.size(), 180u);
@@ -182,13 +194,16 @@ TEST(Replay, BundledRecordingWithTimeline) {
 TEST(Replay, TruncatedRecordingStillYieldsValidOutputs) {
     const fs::path d = fresh_dir("truncated");
     {
-        cv::VideoWriter w((d / "in.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, {320, 240});
+        cv::VideoWriter w((d / "in.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                          {320, 240});
         ASSERT_TRUE(w.isOpened());
-        for (int i = 0; i < 60; ++i) w.write(cv::Mat(240, 320, CV_8UC3, cv::Scalar(i * 4, 100, 200 - i * 3)));
+        for (int i = 0; i < 60; ++i)
+            w.write(cv::Mat(240, 320, CV_8UC3, cv::Scalar(i * 4, 100, 200 - i * 3)));
     }
     fs::resize_file(d / "in.avi", fs::file_size(d / "in.avi") / 2);
-    const CommandResult r = run(kBoard + "--input " + (d / "in.avi").string() + " --out " + (d / "out.mkv").string() +
-                      " --trace " + (d / "t.jsonl").string() + " --events ''");
+    const CommandResult r =
+        run(kBoard + "--input " + (d / "in.avi").string() + " --out " + (d / "out.mkv").string() +
+            " --trace " + (d / "t.jsonl").string() + " --events ''");
     ASSERT_EQ(r.status, 0) << r.output;
     const auto recs = load(d / "t.jsonl");
     EXPECT_GT(recs.size(), 10u);
@@ -207,9 +222,11 @@ TEST(Replay, SizeChangeMidStreamKeepsEveryFrameAndStartsANewSegment) {
     const fs::path big = d / "big";
     write_frames(big, 8, 480, 360);
     for (int i = 0; i < 8; ++i)
-        fs::rename(big / (std::to_string(i) + ".png"), d / "in" / (std::to_string(12 + i) + ".png"));
-    const CommandResult r = run(kBoard + "--input " + (d / "in").string() + " --out " + (d / "out.mkv").string() +
-                                " --trace " + (d / "t.jsonl").string() + " --events ''");
+        fs::rename(big / (std::to_string(i) + ".png"),
+                   d / "in" / (std::to_string(12 + i) + ".png"));
+    const CommandResult r =
+        run(kBoard + "--input " + (d / "in").string() + " --out " + (d / "out.mkv").string() +
+            " --trace " + (d / "t.jsonl").string() + " --events ''");
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("1 format changes"), std::string::npos) << r.output;
     const auto recs = load(d / "t.jsonl");
@@ -238,8 +255,9 @@ TEST(Replay, RealLaparoscopicClip) {
     const fs::path frames = fs::path(ENDOTOWER_SHARED_DATA) / "sznitman_lap" / "frames";
     if (!fs::is_directory(frames)) GTEST_SKIP() << "skipped: " << frames << " is absent";
     const fs::path d = fresh_dir("sznitman");
-    const CommandResult r = run(badge_only_board(d) + "--input " + frames.string() + " --out '' --frames " + (d / "out").string() +
-                      " --trace " + (d / "t.jsonl").string() + " --events ''");
+    const CommandResult r =
+        run(badge_only_board(d) + "--input " + frames.string() + " --out '' --frames " +
+            (d / "out").string() + " --trace " + (d / "t.jsonl").string() + " --events ''");
     ASSERT_EQ(r.status, 0) << r.output;
     const auto recs = load(d / "t.jsonl");
     ASSERT_EQ(recs.size(), 400u);
@@ -260,13 +278,16 @@ TEST(Replay, RealLaparoscopicClip) {
 // speed 0-4 cm/s (97 %; the book measured 82 %), through `scene`, `sim` and `eval`.
 TEST(Replay, DefaultTrackerMeetsTheGoalOnAnUnseenSimulatorSuite) {
     const fs::path d = fresh_dir("tracking");
-    CommandResult r = run(std::string("scene --scenario ") + ENDOTOWER_SOURCE_DIR +
-                          "/board/sim/scenarios/t41_speed_0_4.yaml --frames 30 --out " + (d / "scene").string());
+    CommandResult r =
+        run(std::string("scene --scenario ") + ENDOTOWER_SOURCE_DIR +
+            "/board/sim/scenarios/t41_speed_0_4.yaml --frames 30 --out " + (d / "scene").string());
     ASSERT_EQ(r.status, 0) << r.output;
-    r = run(kBoard + "--input " + (d / "scene" / "frames").string() + " --events '' --out '' --frames " +
-            (d / "out").string() + " --trace " + (d / "t.jsonl").string());
+    r = run(kBoard + "--input " + (d / "scene" / "frames").string() +
+            " --events '' --out '' --frames " + (d / "out").string() + " --trace " +
+            (d / "t.jsonl").string());
     ASSERT_EQ(r.status, 0) << r.output;
-    r = run("eval --trace " + (d / "t.jsonl").string() + " --truth " + (d / "scene" / "truth.jsonl").string() +
+    r = run("eval --trace " + (d / "t.jsonl").string() + " --truth " +
+            (d / "scene" / "truth.jsonl").string() +
             " --min-success 0.97 --max-false-positives 0.05");
     EXPECT_EQ(r.status, 0) << r.output;
 }
@@ -278,7 +299,8 @@ TEST(Replay, DefaultTrackerMeetsTheGoalOnAnUnseenSimulatorSuite) {
 TEST(Replay, CalibratedScopeGivesTheToolTipInMillimetres) {
     const fs::path d = fresh_dir("pose");
     CommandResult r = run(std::string("scene --scenario ") + ENDOTOWER_SOURCE_DIR +
-                          "/board/sim/scenarios/pose_depth_30_70.yaml --frames 30 --out " + (d / "scene").string());
+                          "/board/sim/scenarios/pose_depth_30_70.yaml --frames 30 --out " +
+                          (d / "scene").string());
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream truth(d / "scene" / "truth.jsonl");
     std::string line;
@@ -287,21 +309,32 @@ TEST(Replay, CalibratedScopeGivesTheToolTipInMillimetres) {
     const double fx = cam["fx"], fy = cam["fy"], f2 = fx * fy;
     const double k1 = cam["distortion"]["k"][0], k2 = cam["distortion"]["k"][1];
     // The simulator's odd polynomial is in px about (cx, cy); OpenCV's in focal lengths.
-    nlohmann::json cal = {{"scope", "sim"}, {"model", "pinhole"}, {"image_size", {cam["width"], cam["height"]}},
-                          {"fx", fx}, {"fy", fy}, {"cx", cam["cx"]}, {"cy", cam["cy"]},
-                          {"distortion", {k1 * f2, k2 * f2 * f2, 0, 0, 0}}, {"rms", 0.1}};
+    nlohmann::json cal = {{"scope", "sim"},
+                          {"model", "pinhole"},
+                          {"image_size", {cam["width"], cam["height"]}},
+                          {"fx", fx},
+                          {"fy", fy},
+                          {"cx", cam["cx"]},
+                          {"cy", cam["cy"]},
+                          {"distortion", {k1 * f2, k2 * f2 * f2, 0, 0, 0}},
+                          {"rms", 0.1}};
     std::ofstream(d / "cal.json") << cal.dump(1) << "\n";
-    std::ofstream(d / "board.yaml") << "board: t\ncalibration: cal.json\nanalysis: {stage: none, tracker: likelihood, "
-                                       "tool_model: " << ENDOTOWER_SOURCE_DIR << "/board/sim/models/tool_likelihood.bin, "
-                                       "tool_diameter_mm: 5}\n";
-    r = run("sim --board " + (d / "board.yaml").string() + " --input " + (d / "scene" / "frames").string() +
-            " --events '' --out '' --frames " + (d / "out").string() + " --trace " + (d / "t.jsonl").string());
+    std::ofstream(d / "board.yaml")
+        << "board: t\ncalibration: cal.json\nanalysis: {stage: none, tracker: likelihood, "
+           "tool_model: "
+        << ENDOTOWER_SOURCE_DIR
+        << "/board/sim/models/tool_likelihood.bin, "
+           "tool_diameter_mm: 5}\n";
+    r = run("sim --board " + (d / "board.yaml").string() + " --input " +
+            (d / "scene" / "frames").string() + " --events '' --out '' --frames " +
+            (d / "out").string() + " --trace " + (d / "t.jsonl").string());
     ASSERT_EQ(r.status, 0) << r.output;
-    r = run("eval --trace " + (d / "t.jsonl").string() + " --truth " + (d / "scene" / "truth.jsonl").string() +
-            " --min-success 0.97 --max-tip-error-mm 3");
+    r = run("eval --trace " + (d / "t.jsonl").string() + " --truth " +
+            (d / "scene" / "truth.jsonl").string() + " --min-success 0.97 --max-tip-error-mm 3");
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("3-D tip error mean"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("(30)"), std::string::npos) << "every frame has a 3-D tip: " << r.output;
+    EXPECT_NE(r.output.find("(30)"), std::string::npos)
+        << "every frame has a 3-D tip: " << r.output;
 }
 
 TEST(Cli, HelpAndVersion) {
@@ -333,9 +366,11 @@ TEST(Cli, BadInputIsNamedWithExitCode2) {
         {"sim --input " + (d / "empty").string() + out, "no images"},
         {"sim --input " + (d / "notavideo.mp4").string() + out, "cannot decode video"},
         {"sim --events " + (d / "events.txt").string() + out, (d / "events.txt").string() + ":2:"},
-        {"sim --board " + (d / "board.yaml").string(), (d / "board.yaml").string() + ":3: field 'video.latency_ms'"},
+        {"sim --board " + (d / "board.yaml").string(),
+         (d / "board.yaml").string() + ":3: field 'video.latency_ms'"},
         {"sim --bogus", "unknown option '--bogus'"},
-        {"sim --out " + (d / "o.mov").string(), "unsupported extension '.mov' (use .mkv, .avi or .mp4)"},
+        {"sim --out " + (d / "o.mov").string(),
+         "unsupported extension '.mov' (use .mkv, .avi or .mp4)"},
         {"sim --latency-ms x", "--latency-ms needs a number"},
         {"launch", "unknown command 'launch'"},
     };

@@ -59,7 +59,7 @@ bool decode_dicom(const std::string& path, std::uintmax_t file_size, MediaImage&
         if (length != DCM_UndefinedLength && length > file_size)
             return fail(error, path,
                         "corrupt DICOM file (element " +
-                            std::string(stack.top()->getTag().toString().c_str()) +
+                            std::string(stack.top()->getTag().toString()) +
                             " longer than the file)");
     }
     DcmDataset* ds = file.getDataset();

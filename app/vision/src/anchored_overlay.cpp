@@ -141,8 +141,10 @@ hal::SceneBox anchored_cube(const TissuePose& pose, const std::array<hal::Rgba8,
                          pose.origin_mm.z - r[8] * edge / 2};
     for (int col = 0; col < 3; ++col)
         for (int row = 0; row < 3; ++row)
-            box.camera_from_model[static_cast<std::size_t>(4 * col + row)] =
-                static_cast<float>(r[static_cast<std::size_t>(3 * row + col)]);
+            box.camera_from_model[4 * static_cast<std::size_t>(col) +
+                                  static_cast<std::size_t>(row)] =
+                static_cast<float>(
+                    r[3 * static_cast<std::size_t>(row) + static_cast<std::size_t>(col)]);
     box.camera_from_model[12] = static_cast<float>(c[0]);
     box.camera_from_model[13] = static_cast<float>(c[1]);
     box.camera_from_model[14] = static_cast<float>(c[2]);

@@ -22,7 +22,8 @@ void ColourParticleFilter::configure(cv::Size image) {
     weights_.assign(n, 0);
     order_.assign(n, 0);
     source_.assign(n, 0);
-    const auto m = static_cast<std::size_t>(params_.hue_bins * params_.sat_bins);
+    const auto m =
+        static_cast<std::size_t>(params_.hue_bins) * static_cast<std::size_t>(params_.sat_bins);
     reference_.assign(m, 0);
     frame_hist_.assign(m, 0);
     scratch_.assign(m, 0);

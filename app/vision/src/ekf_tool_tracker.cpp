@@ -66,7 +66,7 @@ void EkfToolTracker::configure(const hal::FrameFormat& format) {
     const int nt =
         2 * static_cast<int>(std::ceil(params_.window_theta_deg / params_.theta_step_deg)) + 1;
     const int nr = 2 * static_cast<int>(std::ceil(params_.window_rho_px)) + 1;
-    w.votes.assign(static_cast<std::size_t>(nt * nr), 0);
+    w.votes.assign(static_cast<std::size_t>(nt) * static_cast<std::size_t>(nr), 0);
     w.run.assign(static_cast<std::size_t>(2 * std::ceil(std::hypot(sz.width, sz.height)) + 3), 0);
     w.tracking = false;
 }
@@ -96,8 +96,10 @@ bool window_peak(const std::vector<cv::Point>& pixels, Polar predicted, double h
     int best = -1, bi = 0, bj = 0;
     for (int i = 0; i < 2 * kt + 1; ++i)
         for (int j = 0; j < nr; ++j)
-            if (votes[static_cast<std::size_t>(i * nr + j)] > best) {
-                best = votes[static_cast<std::size_t>(i * nr + j)];
+            if (votes[static_cast<std::size_t>(i) * static_cast<std::size_t>(nr) +
+                      static_cast<std::size_t>(j)] > best) {
+                best = votes[static_cast<std::size_t>(i) * static_cast<std::size_t>(nr) +
+                             static_cast<std::size_t>(j)];
                 bi = i;
                 bj = j;
             }

@@ -262,8 +262,8 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     }
     // Distance of a point to the edge of the picture: the lit circle or the frame.
     auto rim_distance = [&](double x, double y) {
-        const int xi = std::clamp(static_cast<int>(x + 0.5), 0, W - 1),
-                  yi = std::clamp(static_cast<int>(y + 0.5), 0, H - 1);
+        const int xi = std::clamp(static_cast<int>(std::lround(x)), 0, W - 1),
+                  yi = std::clamp(static_cast<int>(std::lround(y)), 0, H - 1);
         return std::min<double>({w.rim.at<float>(yi, xi), x + 1, y + 1, W - x, H - y});
     };
     w.candidates.clear();

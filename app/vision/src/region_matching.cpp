@@ -96,7 +96,7 @@ bool match_keyframe(const FeatureSet& keyframe, const FeatureSet& frame, int nor
     for (const cv::DMatch& m : kept) below += m.distance <= mean;
     // A small region has few matches: when the filter would leave too few for
     // RANSAC to be meaningful, RANSAC sorts the ratio-tested set instead.
-    const bool filter = below >= static_cast<std::size_t>(2 * p.min_inliers);
+    const bool filter = below >= 2 * static_cast<std::size_t>(p.min_inliers);
     for (const cv::DMatch& m : kept) {
         if (filter && m.distance > mean) continue;
         out.keyframe_pts.push_back(keyframe.keypoints[m.queryIdx].pt);

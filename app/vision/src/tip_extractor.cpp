@@ -12,7 +12,8 @@ constexpr int kMaxSamples = 4096;
 
 // HSV value (max of B, G, R) and saturation (255 (max - min) / max) of the pixels
 // across the line at (x, y), averaged.
-int sample_value(const hal::Frame& f, double x, double y, double nx, double ny, int halfwidth, int* sat) {
+int sample_value(const hal::Frame& f, double x, double y, double nx, double ny, int halfwidth,
+                 int* sat) {
     int sum = 0, ssum = 0, n = 0;
     for (int k = -halfwidth; k <= halfwidth; ++k) {
         const int px = static_cast<int>(std::lround(x + k * nx));
@@ -29,7 +30,8 @@ int sample_value(const hal::Frame& f, double x, double y, double nx, double ny, 
 }
 
 bool in_view(const hal::Frame& f, const FieldOfView& fov, double x, double y, double margin) {
-    if (x < margin || y < margin || x > f.format.width - 1 - margin || y > f.format.height - 1 - margin)
+    if (x < margin || y < margin || x > f.format.width - 1 - margin ||
+        y > f.format.height - 1 - margin)
         return false;
     if (fov.radius <= 0) return true;
     return std::hypot(x - fov.cx, y - fov.cy) <= fov.radius - margin;
@@ -47,8 +49,8 @@ bool intersect(const Segment& s, const Segment& t, Point2& out) {
 
 }  // namespace
 
-TipResult extract_tip(const hal::Frame& f, const EdgePair& edges, Point2 toward_tip, const FieldOfView& fov,
-                      const TipExtractorParams& params) {
+TipResult extract_tip(const hal::Frame& f, const EdgePair& edges, Point2 toward_tip,
+                      const FieldOfView& fov, const TipExtractorParams& params) {
     TipResult r;
     if (!edges.found || f.format.pixel_format != hal::PixelFormat::kBgr24) return r;
     const double tn = std::hypot(toward_tip.x, toward_tip.y);
@@ -66,8 +68,11 @@ TipResult extract_tip(const hal::Frame& f, const EdgePair& edges, Point2 toward_
     const double nx = -my, ny = mx;
 
     // The search starts at the end of the straight edges farthest along the midline.
-    auto along = [&](Point2 p) { return (p.x - edges.midline.a.x) * mx + (p.y - edges.midline.a.y) * my; };
-    double start = std::max({along(edges.e1.a), along(edges.e1.b), along(edges.e2.a), along(edges.e2.b)});
+    auto along = [&](Point2 p) {
+        return (p.x - edges.midline.a.x) * mx + (p.y - edges.midline.a.y) * my;
+    };
+    double start =
+        std::max({along(edges.e1.a), along(edges.e1.b), along(edges.e2.a), along(edges.e2.b)});
     // Filter 2: not beyond the edges' intersection when it lies ahead.
     double stop = params.search_length_px > 0 ? start + params.search_length_px : 1e9;
     Point2 cross;
@@ -85,7 +90,8 @@ TipResult extract_tip(const hal::Frame& f, const EdgePair& edges, Point2 toward_
         const double x = edges.midline.a.x + t * mx, y = edges.midline.a.y + t * my;
         if (!in_view(f, fov, x, y, params.border_margin_px)) break;  // filter 3
         at[static_cast<std::size_t>(n)] = {x, y};
-        v[static_cast<std::size_t>(n)] = sample_value(f, x, y, nx, ny, params.profile_halfwidth, &sat[static_cast<std::size_t>(n)]);
+        v[static_cast<std::size_t>(n)] = sample_value(f, x, y, nx, ny, params.profile_halfwidth,
+                                                      &sat[static_cast<std::size_t>(n)]);
         ++n;
     }
     // Changes between neighbours two samples apart (robust to one-pixel
@@ -97,15 +103,18 @@ TipResult extract_tip(const hal::Frame& f, const EdgePair& edges, Point2 toward_
     for (int pass = 0; pass < (params.last_strong_change ? 2 : 1); ++pass) {
         const int floor = pass == 0 ? 0 : std::max(params.min_contrast, best / 2);
         for (int i = 0; i + 2 < n; ++i) {
-            const int a = v[static_cast<std::size_t>(i)], b = v[static_cast<std::size_t>(i + 2)];
-            if (a >= params.specular_value || b >= params.specular_value || a < 0 || b < 0) continue;
+            const int a = v[static_cast<std::size_t>(i)], b = v[static_cast<std::size_t>(i) + 2];
+            if (a >= params.specular_value || b >= params.specular_value || a < 0 || b < 0)
+                continue;
             // Grey metal against red tissue differs in saturation more than in value.
-            const int c = std::max(std::abs(b - a), params.use_saturation
-                                                        ? std::abs(sat[static_cast<std::size_t>(i + 2)] - sat[static_cast<std::size_t>(i)])
-                                                        : 0);
+            const int c =
+                std::max(std::abs(b - a), params.use_saturation
+                                              ? std::abs(sat[static_cast<std::size_t>(i) + 2] -
+                                                         sat[static_cast<std::size_t>(i)])
+                                              : 0);
             if (pass == 0 ? c > best : c >= floor) {
                 if (pass == 0) best = c;
-                r.tip = at[static_cast<std::size_t>(i + 1)];
+                r.tip = at[static_cast<std::size_t>(i) + 1];
             }
         }
     }

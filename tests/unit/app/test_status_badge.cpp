@@ -8,7 +8,7 @@ namespace endotower::app {
 namespace {
 
 hal::Frame bgr_frame(std::vector<std::uint8_t>& buf, int w, int h) {
-    buf.assign(static_cast<std::size_t>(w * h * 3), 0);
+    buf.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3, 0);
     hal::Frame f;
     f.format = {w, h, w * 3, hal::PixelFormat::kBgr24};
     f.data = buf.data();
@@ -19,9 +19,9 @@ TEST(StatusBadge, MeasuresLumaAndClippedFraction) {
     std::vector<std::uint8_t> buf;
     hal::Frame f = bgr_frame(buf, 8, 8);
     // Left half white (luma 255, clipped), right half mid grey 100.
-    for (int y = 0; y < 8; ++y)
-        for (int x = 0; x < 8; ++x)
-            for (int c = 0; c < 3; ++c) buf[static_cast<std::size_t>((y * 8 + x) * 3 + c)] = x < 4 ? 255 : 100;
+    for (std::size_t y = 0; y < 8; ++y)
+        for (std::size_t x = 0; x < 8; ++x)
+            for (std::size_t c = 0; c < 3; ++c) buf[(y * 8 + x) * 3 + c] = x < 4 ? 255 : 100;
     double light = 0, clipped = 0;
     StatusBadge::measure(f, 1, light, clipped);
     // (29+150+77) = 256 weights: white -> (255*256)>>8 = 255, grey -> 100.

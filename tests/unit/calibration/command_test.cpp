@@ -56,7 +56,8 @@ void save(const fs::path& p, const scene::Image& img) {
 // A 9x6-inner-corner chessboard (4 mm squares, one white square of margin) at pose
 // (rvec, t mm), seen through the simulated scope: every displayed pixel undistorted,
 // its ray cut with the board plane (2x2 samples), black outside the field of view.
-cv::Mat render_chessboard(const scene::CameraModel& cam, cv::Vec3d rvec, cv::Vec3d t) {
+cv::Mat render_chessboard(const scene::CameraModel& cam, const cv::Vec3d& rvec,
+                          const cv::Vec3d& t) {
     cv::Matx33d rot;
     cv::Rodrigues(rvec, rot);
     const cv::Vec3d n(rot(0, 2), rot(1, 2), rot(2, 2));
@@ -70,7 +71,8 @@ cv::Mat render_chessboard(const scene::CameraModel& cam, cv::Vec3d rvec, cv::Vec
             double acc = 0;
             for (int s = 0; s < 4; ++s) {
                 double xu, yu;
-                const double sx = x - 0.25 + 0.5 * (s % 2), sy = y - 0.25 + 0.5 * (s / 2);
+                const int col = s % 2, row = s / 2;  // the 2x2 sample grid
+                const double sx = x - 0.25 + 0.5 * col, sy = y - 0.25 + 0.5 * row;
                 if (!cam.undistort(sx, sy, xu, yu)) continue;
                 const scene::Vec3 r = cam.ray(xu, yu);
                 const cv::Vec3d ray(r.x, r.y, r.z);

@@ -47,7 +47,7 @@ const Detected& detect_all(const std::string& dir, const std::string& prefix,
 
 #define SKIP_WITHOUT(dir)                    \
     if (!std::filesystem::is_directory(dir)) \
-    GTEST_SKIP() << "no real data at " << dir << " (../shared/data absent)"
+    GTEST_SKIP() << "no real data at " << (dir) << " (../shared/data absent)"
 
 // OpenCV's sample chessboards: RMS <= 0.5 px, pinhole and fisheye. left02 is the view
 // OpenCV's own left_intrinsics.yml lists at 1.18 px (the others about 0.2 px): it is

@@ -2,9 +2,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
-
 
 #include <cstdio>
 #include <filesystem>
@@ -32,9 +30,10 @@ inline std::string trace_line(int frame, const std::string& analysis = "") {
 inline std::string ttool(int id, double x, double y, double axis, double hx = -1, double hy = -1,
                          const std::string& tip_mm = "null") {
     char b[256];
-    std::snprintf(b, sizeof b,
-                  R"({"id":%d,"tip_px":[%g,%g],"head_px":[%g,%g],"axis_deg":%g,"confidence":0.9,"tip_mm":%s})",
-                  id, x, y, hx < 0 ? x : hx, hy < 0 ? y : hy, axis, tip_mm.c_str());
+    std::snprintf(
+        b, sizeof b,
+        R"({"id":%d,"tip_px":[%g,%g],"head_px":[%g,%g],"axis_deg":%g,"confidence":0.9,"tip_mm":%s})",
+        id, x, y, hx < 0 ? x : hx, hy < 0 ? y : hy, axis, tip_mm.c_str());
     return b;
 }
 
@@ -42,9 +41,10 @@ inline std::string ttool(int id, double x, double y, double axis, double hx = -1
 inline std::string gtool(int id, double x, double y, double axis, double width, bool visible = true,
                          const std::string& extra = "") {
     char b[320];
-    std::snprintf(b, sizeof b,
-                  R"({"id":%d,"visible":%s,"tip_px":[%g,%g],"head_px":[%g,%g],"axis_deg":%g,"width_px":%g%s})",
-                  id, visible ? "true" : "false", x, y, x, y, axis, width, extra.c_str());
+    std::snprintf(
+        b, sizeof b,
+        R"({"id":%d,"visible":%s,"tip_px":[%g,%g],"head_px":[%g,%g],"axis_deg":%g,"width_px":%g%s})",
+        id, visible ? "true" : "false", x, y, x, y, axis, width, extra.c_str());
     return b;
 }
 
@@ -56,7 +56,8 @@ inline std::string truth_line(int frame, const std::string& tools, const std::st
 
 // A fresh directory under the test's temp dir.
 inline fs::path temp_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("endotower_eval_" + name + "_" + std::to_string(::getpid()));
+    fs::path d =
+        fs::temp_directory_path() / ("endotower_eval_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -70,6 +71,8 @@ inline std::string write_lines(const fs::path& path, const std::vector<std::stri
 
 using endotower::test::CommandRun;
 // `endotower eval ARGS` with stdout and stderr captured, and its exit status.
-inline CommandRun run_eval(const std::string& args) { return endotower::test::run_endotower("eval " + args); }
+inline CommandRun run_eval(const std::string& args) {
+    return endotower::test::run_endotower("eval " + args);
+}
 
 }  // namespace endotower::eval::test

@@ -44,7 +44,7 @@ protected:
         std::string name = fs::path(scenario).stem().string() + extra;
         for (char& ch : name)
             if (ch == ' ' || ch == '-') ch = '_';
-        const fs::path out = dir() / name;
+        fs::path out = dir() / name;
         if (!fs::exists(out / "truth.jsonl")) {
             fs::create_directories(dir());
             const int rc = run("scene --scenario " + kRoot + "/board/sim/scenarios/" + scenario +
@@ -123,7 +123,7 @@ TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
 namespace {
 
 fs::path board(const fs::path& dir, const std::string& model, double hold_ms) {
-    const fs::path b = dir / ("board_" + std::to_string(static_cast<int>(hold_ms)) + ".yaml");
+    fs::path b = dir / ("board_" + std::to_string(static_cast<int>(hold_ms)) + ".yaml");
     std::ofstream(b) << "board: test\nanalysis:\n  stage: none\n  tracker: none\n  tool_model: "
                      << kModels << "tool_likelihood.bin\n  gestures: {model: " << model
                      << ", hold_ms: " << hold_ms << "}\nsim:\n  events: " << kRoot

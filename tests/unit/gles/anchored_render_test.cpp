@@ -49,7 +49,7 @@ protected:
         for (int i = 0; i < 9; ++i) e_.homography[std::size_t(i)] = h_.val[i];
     }
     hal::Rgba8 at(int x, int y) const {
-        const std::uint8_t* p = &px_[std::size_t(4 * (y * kW + x))];
+        const std::uint8_t* p = &px_[4 * (std::size_t(y) * kW + std::size_t(x))];
         return {p[0], p[1], p[2], p[3]};
     }
     // The drawn pixels (alpha 255) against the true silhouette, the convex hull of
@@ -91,7 +91,7 @@ TEST_F(AnchoredRender, ImageCornersWithinOnePixelOfTheHomography) {
     for (int y = 0; y < kS; ++y)
         for (int x = 0; x < 2 * kS; ++x) {
             const hal::Rgba8 c = quadrant[x < kS ? (y < kS / 2 ? 0 : 3) : (y < kS / 2 ? 1 : 2)];
-            std::uint8_t* p = &img[std::size_t(4 * (y * 2 * kS + x))];
+            std::uint8_t* p = &img[4 * (std::size_t(y) * 2 * kS + std::size_t(x))];
             p[0] = c.r, p[1] = c.g, p[2] = c.b, p[3] = c.a;
         }
     ASSERT_TRUE(renderer_->set_image(0, {2 * kS, kS, 8 * kS, img.data()}));

@@ -329,7 +329,8 @@ TEST_F(GlesRendererTest, CubeMatchesThePinholeWithinOnePixel) {
     box.size_mm = 40;
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < 3; ++k)
-            box.camera_from_model[static_cast<std::size_t>(4 * c + k)] = float(r(k, c));
+            box.camera_from_model[4 * static_cast<std::size_t>(c) + static_cast<std::size_t>(k)] =
+                float(r(k, c));
     box.camera_from_model[12] = 10, box.camera_from_model[13] = -5, box.camera_from_model[14] = 120;
     box.camera_from_model[15] = 1;
     box.faces.fill({200, 60, 60, 255});
@@ -408,7 +409,8 @@ TEST_F(GlesRendererTest, FullMenuRectsCoverEveryChangedPixel) {
     hal::OverlayScene scene;
     scene.camera = {.fx = 300, .fy = 300, .cx = 159.5, .cy = 119.5};
     for (int i = 0; i < 12; ++i) {
-        const float x = 5 + float(i % 4) * 78, y = 5 + float(i / 4) * 40;
+        const int row = i / 4, col = i % 4;  // a 4-column grid
+        const float x = 5 + float(col) * 78, y = 5 + float(row) * 40;
         scene.quads.add({.x = x,
                          .y = y,
                          .width = 70,
@@ -498,12 +500,14 @@ TEST_F(GlesRendererTest, ManyItemsMergeIntoSixteenRects) {
     Target t;
     t.pattern();
     hal::OverlayScene scene;
-    for (int i = 0; i < 48; ++i)
-        ASSERT_TRUE(scene.quads.add({.x = 4.f + 40 * float(i % 8),
-                                     .y = 4.f + 40 * float(i / 8),
+    for (int i = 0; i < 48; ++i) {
+        const int row = i / 8, col = i % 8;  // an 8-column grid
+        ASSERT_TRUE(scene.quads.add({.x = 4.f + 40 * float(col),
+                                     .y = 4.f + 40 * float(row),
                                      .width = 30,
                                      .height = 30,
                                      .fill = {200, 10, 10, 255}}));
+    }
     EXPECT_FALSE(scene.quads.add({}));  // past capacity
     const Target after = render(scene, t);
     EXPECT_EQ(drawn_.count, 16u);
@@ -545,7 +549,8 @@ TEST_F(GlesRendererTest, WarpedImageFollowsTheHomographyWithinOnePixel) {
     for (int y = 0; y < kS; ++y)
         for (int x = 0; x < kS; ++x) {
             const Rgba8 c = quadrant[quadrant_of((x + 0.5) / kS, (y + 0.5) / kS)];
-            std::uint8_t* p = &px[static_cast<std::size_t>(4 * (y * kS + x))];
+            std::uint8_t* p =
+                &px[4 * (static_cast<std::size_t>(y) * kS + static_cast<std::size_t>(x))];
             p[0] = c.r, p[1] = c.g, p[2] = c.b, p[3] = c.a;
         }
     ASSERT_TRUE(renderer_->set_image(2, {kS, kS, 4 * kS, px.data()})) << renderer_->error();

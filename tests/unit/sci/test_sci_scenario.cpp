@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 using endotower::test::run_endotower;
 
 fs::path temp_dir(const std::string& name) {
-    const fs::path d =
+    fs::path d =
         fs::temp_directory_path() / ("endotower_sci_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);

@@ -278,7 +278,7 @@ TEST(RecordedSource, OpenErrorsNameThePath) {
     EXPECT_EQ(c.error(), "cannot decode video: " + text + " (unsupported codec or not a video)");
 
     const std::string zero = dir.file("zero.mkv");
-    std::ofstream{zero};
+    std::ofstream(zero).close();  // an empty file
     RecordedFrameSource d({zero}, clock);
     EXPECT_FALSE(d.open());
     EXPECT_EQ(d.error(), "cannot decode video: " + zero + " (unsupported codec or not a video)");

@@ -23,11 +23,13 @@ namespace {
 namespace fs = std::filesystem;
 
 using endotower::test::CommandRun;
-CommandRun run(const std::string& args) { return endotower::test::run_endotower(args); }
+CommandRun run(const std::string& args) {
+    return endotower::test::run_endotower(args);
+}
 
 fs::path temp_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() /
-                       ("endotower_regions_" + name + "_" + std::to_string(::getpid()));
+    fs::path d = fs::temp_directory_path() /
+                 ("endotower_regions_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -35,7 +37,7 @@ fs::path temp_dir(const std::string& name) {
 
 // A board with no other analysis, so only the region stage runs.
 fs::path board(const fs::path& dir) {
-    const fs::path b = dir / "board.yaml";
+    fs::path b = dir / "board.yaml";
     std::ofstream(b) << "board: regions_test\nanalysis:\n  stage: none\n  tracker: none\n";
     return b;
 }
@@ -90,7 +92,7 @@ fs::path image_board(const fs::path& dir) {
     cv::Mat img(48, 64, CV_8UC3, cv::Scalar(40, 200, 240));
     img(cv::Rect(0, 0, 32, 24)).setTo(cv::Scalar(255, 0, 0));
     cv::imwrite((dir / "media/logo.png").string(), img);
-    const fs::path b = dir / "board_image.yaml";
+    fs::path b = dir / "board_image.yaml";
     std::ofstream(b) << "board: regions_test\nanalysis:\n  stage: none\n  tracker: none\n"
                         "  regions: {media: media}\n";
     return b;
@@ -117,10 +119,10 @@ TEST_P(T65AnchoredImage, CornersFollowTheTruth) {
         region += (region.empty() ? "" : " ") + std::to_string(x) + "," + std::to_string(y);
         x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
     }
-    const CommandRun sim =
-        run("sim --board " + image_board(dir).string() + " --input " +
-            (dir / "scene/frames").string() + " --out " + (dir / "o.avi").string() + " --trace " +
-            (dir / "trace.jsonl").string() + " --region " + quote(region + " overlay=image:logo.png"));
+    const CommandRun sim = run(
+        "sim --board " + image_board(dir).string() + " --input " + (dir / "scene/frames").string() +
+        " --out " + (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string() +
+        " --region " + quote(region + " overlay=image:logo.png"));
     ASSERT_EQ(sim.status, 0) << sim.output;
     // The 64x48 image fitted (aspect kept, centred) into the marked box.
     const double scale = std::min((x1 - x0) / 64, (y1 - y0) / 48);
@@ -140,7 +142,8 @@ TEST_P(T65AnchoredImage, CornersFollowTheTruth) {
         const auto& poly = tr["polygon_px"];
         for (std::size_t i = 0; i < poly.size(); ++i) {
             const auto &p = poly[i], &q = poly[(i + 1) % poly.size()];
-            area += p[0].get<double>() * q[1].get<double>() - q[0].get<double>() * p[1].get<double>();
+            area +=
+                p[0].get<double>() * q[1].get<double>() - q[0].get<double>() * p[1].get<double>();
         }
         double err = 0;
         for (int k = 0; k < 4; ++k) {
@@ -148,7 +151,8 @@ TEST_P(T65AnchoredImage, CornersFollowTheTruth) {
             const double u = (h[0] * fx[k] + h[1] * fy[k] + h[2]) / w;
             const double v = (h[3] * fx[k] + h[4] * fy[k] + h[5]) / w;
             err += std::hypot(a["corners_px"][k][0].get<double>() - u,
-                              a["corners_px"][k][1].get<double>() - v) / 4;
+                              a["corners_px"][k][1].get<double>() - v) /
+                   4;
         }
         EXPECT_LE(err, 0.10 * std::sqrt(std::abs(area) / 2)) << "frame " << f;
         sum += err;
@@ -191,8 +195,8 @@ TEST(RegionsCommand, AnchoredOverlayInput) {
     r = run(sim + quote(poly + " overlay=object:cube"));
     EXPECT_EQ(r.status, 0) << r.output;
     // A timeline mark's overlay is checked with its file and line.
-    std::ofstream(dir / "events.txt") << "# marks\nframe 1 region " << poly
-                                      << " overlay=object:teapot\n";
+    std::ofstream(dir / "events.txt")
+        << "# marks\nframe 1 region " << poly << " overlay=object:teapot\n";
     r = run(sim + quote(poly) + " --events " + (dir / "events.txt").string());
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_NE(r.output.find("events.txt:2: overlay 'object:teapot': unknown object 'teapot'"),
