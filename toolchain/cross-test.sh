@@ -3,7 +3,8 @@
 # arm64 sysroot (toolchain/install-cross-deps.sh) and runs the unit tests under
 # qemu-user on this host. The qemu-system guest tests (label "driver") boot an x86
 # kernel and are left to the native build.
-# Usage: toolchain/cross-test.sh [BUILD_DIR]   (default build/arm64; JOBS=N for -j)
+# Usage: toolchain/cross-test.sh [BUILD_DIR]   (default build/arm64; JOBS=N for -j;
+#        ALL=1 also runs the end-to-end command tests)
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${1:-$repo/build/arm64}
@@ -17,4 +18,9 @@ file "$build/firmware/endotower" | grep -q "ARM aarch64" || { echo "cross-test: 
 # qemu-user runs the analysis 10-30x slower than the host: the replay's 2 s wall-clock
 # watchdog on a stage call would take slow stages for hung ones (firmware/src/sim_command.cpp).
 export ENDOTOWER_REPLAY_WATCHDOG_MS=${ENDOTOWER_REPLAY_WATCHDOG_MS:-60000}
-ctest --test-dir "$build" -LE driver -j"$jobs" --output-on-failure --timeout 900
+# The unit tests (label "unit"); the end-to-end command tests (label "command": they
+# run the endotower executable on rendered suites, over an hour under qemu-user on two
+# cores) only with ALL=1.
+exclude='driver|command'
+[ "${ALL:-0}" = 1 ] && exclude='driver'
+ctest --test-dir "$build" -LE "$exclude" -j"$jobs" --output-on-failure --timeout 900
