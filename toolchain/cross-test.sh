@@ -15,7 +15,7 @@ cmake -S "$repo" -B "$build" -DCMAKE_TOOLCHAIN_FILE="$repo/toolchain/aarch64-lin
   -DCMAKE_BUILD_TYPE=Release -DENDOTOWER_BUILD_BENCH=OFF >/dev/null
 cmake --build "$build" -j"$jobs"
 file "$build/firmware/endotower" | grep -q "ARM aarch64" || { echo "cross-test: endotower is not an arm64 binary" >&2; exit 1; }
-# qemu-user runs the analysis 10-30x slower than the host: the replay's 2 s wall-clock
+# qemu-user runs the analysis 8-15x slower than the host: the replay's 2 s wall-clock
 # watchdog on a stage call would take slow stages for hung ones (firmware/src/sim_command.cpp).
 export ENDOTOWER_REPLAY_WATCHDOG_MS=${ENDOTOWER_REPLAY_WATCHDOG_MS:-60000}
 # The unit tests (label "unit"); the end-to-end command tests (label "command": they

@@ -218,7 +218,7 @@ int run_sim_command(const Args& args) {
     }
     hal::Nanos wall_watchdog_ns = 0;
     // The replay's wall-clock watchdog on a stage call (default 2 s) can be raised where
-    // the CPU is emulated: toolchain/cross-test.sh runs the tests under qemu-user, 10-30x
+    // the CPU is emulated: toolchain/cross-test.sh runs the tests under qemu-user, 8-15x
     // slower, where a slow stage is not a hung one. Not a board key: it says what the
     // host is, not what the appliance does.
     if (const char* w = std::getenv("ENDOTOWER_REPLAY_WATCHDOG_MS"); w != nullptr) {
