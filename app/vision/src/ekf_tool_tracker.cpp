@@ -95,14 +95,15 @@ bool window_peak(const std::vector<cv::Point>& pixels, Polar predicted, double h
     }
     int best = -1, bi = 0, bj = 0;
     for (int i = 0; i < 2 * kt + 1; ++i)
-        for (int j = 0; j < nr; ++j)
-            if (votes[static_cast<std::size_t>(i) * static_cast<std::size_t>(nr) +
-                      static_cast<std::size_t>(j)] > best) {
-                best = votes[static_cast<std::size_t>(i) * static_cast<std::size_t>(nr) +
-                             static_cast<std::size_t>(j)];
+        for (int j = 0; j < nr; ++j) {
+            const int v = votes[static_cast<std::size_t>(i) * static_cast<std::size_t>(nr) +
+                                static_cast<std::size_t>(j)];
+            if (v > best) {
+                best = v;
                 bi = i;
                 bj = j;
             }
+        }
     if (best < min_votes) return false;
     peak = {predicted.theta + (bi - kt) * step, predicted.rho + (bj - kr)};
     return true;
