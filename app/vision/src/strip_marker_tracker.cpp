@@ -402,13 +402,24 @@ std::size_t StripMarkerTracker::track(const hal::Frame& frame,
             const Point2 qa{s.e.x + (lo - inset) * u.x, s.e.y + (lo - inset) * u.y},
                 qb{s.e.x + (hi + inset) * u.x, s.e.y + (hi + inset) * u.y};
             const Point2 nv{-v.x, -v.y};
-            double la = -c0, ra = c1, lb = -d0, rb = d1;
-            if (!silhouette_edge(w.gray, qa, nv, -c0, la) ||
-                !silhouette_edge(w.gray, qa, v, c1, ra))
-                la = -c0, ra = c1;
-            if (!silhouette_edge(w.gray, qb, nv, -d0, lb) ||
-                !silhouette_edge(w.gray, qb, v, d1, rb))
-                lb = -d0, rb = d1;
+            // A bright line lying along a profile (the chart's grid, a glint) raises its
+            // background level past anything the limb reaches: profiles moved along the
+            // shaft, away from the strip and inside the part, stand in for it.
+            const auto silhouettes = [&](double t, double step, double end, double c_lo,
+                                         double c_hi, double& l, double& r) {
+                for (int k = 0; k < 4; ++k, t += step) {
+                    if ((step < 0 && t < end) || (step > 0 && t > end)) break;
+                    const Point2 q{s.e.x + t * u.x, s.e.y + t * u.y};
+                    if (silhouette_edge(w.gray, q, nv, -c_lo, l) &&
+                        silhouette_edge(w.gray, q, v, c_hi, r))
+                        return;
+                }
+                l = -c_lo, r = c_hi;
+            };
+            const double shift = 0.1 * (c1 - c0);
+            double la = 0, ra = 0, lb = 0, rb = 0;
+            silhouettes(lo - inset, -shift, ha ? a0 + 2 : lo - inset, c0, c1, la, ra);
+            silhouettes(hi + inset, shift, hb ? b1 - 2 : hi + inset, d0, d1, lb, rb);
             s.a = {qa.x - la * v.x, qa.y - la * v.y};
             s.b = {qa.x + ra * v.x, qa.y + ra * v.y};
             s.c = {qb.x + rb * v.x, qb.y + rb * v.y};

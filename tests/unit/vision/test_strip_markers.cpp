@@ -45,6 +45,8 @@ struct SyntheticTool {
     double x_tip = 120, cy = 240, w0 = 40, slope = 0;
     double offset = 60, strip = 24, gap = 24;
     int tissue = 110, metal = 200, black = 25;
+    int rim = -1;  // >= 0: the limb, rim_px wide inside the silhouette, in this grey
+    double rim_px = 3;
 
     double width_at(double x) const { return w0 + slope * (x - x_tip) + 1; }
     double polygon_width(double x) const { return w0 + slope * (x - x_tip); }
@@ -57,7 +59,17 @@ struct SyntheticTool {
             {int(std::lround(x_end)), int(std::lround(cy - polygon_width(x_end) / 2))},
             {int(std::lround(x_end)), int(std::lround(cy + polygon_width(x_end) / 2))},
             {int(std::lround(x_tip)), int(std::lround(cy + w0 / 2))}};
-        cv::fillConvexPoly(img, body, cv::Scalar(metal, metal, metal), cv::LINE_8);
+        if (rim >= 0) {
+            cv::fillConvexPoly(img, body, cv::Scalar(rim, rim, rim), cv::LINE_8);
+            const std::vector<cv::Point> inner = {
+                {int(std::lround(x_tip)), int(std::lround(cy - w0 / 2 + rim_px))},
+                {int(std::lround(x_end)), int(std::lround(cy - polygon_width(x_end) / 2 + rim_px))},
+                {int(std::lround(x_end)), int(std::lround(cy + polygon_width(x_end) / 2 - rim_px))},
+                {int(std::lround(x_tip)), int(std::lround(cy + w0 / 2 - rim_px))}};
+            cv::fillConvexPoly(img, inner, cv::Scalar(metal, metal, metal), cv::LINE_8);
+        } else {
+            cv::fillConvexPoly(img, body, cv::Scalar(metal, metal, metal), cv::LINE_8);
+        }
         for (int k = 0; k < 3; ++k) {
             const double x0 = x_tip + offset + k * (strip + gap), x1 = x0 + strip;
             const std::vector<cv::Point> s = {
@@ -140,6 +152,34 @@ TEST(StripMarkers, OneOrTwoOccludedStrips) {
         EXPECT_NEAR(out[0].e.x, xe, 0.5) << hidden << " hidden";
         const double z = kFocal * 5.0 / tool.width_at(xe);
         EXPECT_NEAR(out[0].depth_mm, z, 0.015 * z) << hidden << " hidden";
+    }
+}
+
+// Under the scope's coaxial light the limb darkens to a rim darker than the tissue,
+// which the tool-part threshold leaves out; M comes from the silhouettes beyond it.
+// A glint (or a chart line) just past the silhouettes, where the profile beside the
+// strip reads the background, must not cost those: neighbouring profiles along the
+// band give M within 1 px of the drawn width (the threshold's width is 6 px less).
+TEST(StripMarkers, DarkLimbAndAGlintBesideTheStrip) {
+    SyntheticTool tool;
+    tool.rim = 60;
+    const double band_x = tool.x_tip + tool.offset + tool.strip;  // strip 0 ends here
+    for (const bool glint : {false, true}) {
+        cv::Mat img = tool.draw();
+        if (glint)
+            for (const int sign : {-1, 1}) {
+                const int y0 = static_cast<int>(tool.cy) + sign * 25, y1 = y0 + sign * 15;
+                cv::rectangle(img, cv::Point(int(band_x) + 1, std::min(y0, y1)),
+                              cv::Point(int(band_x) + 6, std::max(y0, y1)),
+                              cv::Scalar(240, 240, 240), cv::FILLED);
+            }
+        StripMarkerTracker t = calibrated_tracker(5.0);
+        std::array<StripMarker, 2> out;
+        ASSERT_EQ(run(t, img, out), 1u) << "glint " << glint;
+        const double xe = tool.strip_centre(0);
+        EXPECT_NEAR(out[0].e.x, xe, 1.0) << "glint " << glint;
+        EXPECT_NEAR(out[0].e.y, tool.cy, 0.5) << "glint " << glint;
+        EXPECT_NEAR(out[0].diameter_px, tool.width_at(xe), 1.0) << "glint " << glint;
     }
 }
 
