@@ -21,6 +21,7 @@ struct Candidate {
     bool has_edges = false;
     bool split = false;       // cut from a region shared with another tool
     bool end_hidden = false;  // its far end runs under the other tool
+    bool solid = true;        // min_solid_fraction of it tool-coloured before the blur
     int track = -1;           // the track whose prediction cut it out, or -1
     Segment e1, e2;
 };
@@ -45,6 +46,10 @@ constexpr double kTipAccel = 2.0, kTipNoise = 1.5, kAngleAccel = 1.0, kAngleNois
 // deviations of the innovation, at least one tool width) or turned by more than
 // kAngleGateDeg is another tool's part; the track coasts on its prediction instead.
 constexpr double kGateSigmas = 4.0, kAngleGateDeg = 20.0;
+// A region short of solid (glints joined to a tool in bright light) is taken only as a
+// live track's continuation: summed cost (tip distance in widths + turn in
+// kAngleGateDeg) at most this.
+constexpr double kContinuationCost = 2.0;
 
 double angle_diff_deg(double a, double b) {
     return std::abs(std::remainder(a - b, 360.0));
@@ -154,7 +159,7 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double e
 
 struct LikelihoodToolTracker::Work {
     double scale = 1.0;
-    cv::Mat small, prob, gray, lit, rim, binary, labels, kernel_fov, kernel_open;
+    cv::Mat small, prob, raw, gray, lit, rim, binary, labels, kernel_fov, kernel_open;
     std::vector<int> offsets, fill;
     std::vector<Px> pixels;
     std::vector<RimPixel> entries;
@@ -177,6 +182,7 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
     w.prob.create(sh, sw, CV_8U);
+    w.raw.create(sh, sw, CV_8U);
     w.lit.create(sh, sw, CV_8U);
     w.gray.create(sh, sw, CV_8U);
     w.rim.create(sh, sw, CV_32F);
@@ -238,6 +244,7 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     // Distance to the edge of the picture (unlit, or the frame's border).
     cv::distanceTransform(w.lit, w.rim, cv::DIST_L2, 3);
     cv::erode(w.lit, w.lit, w.kernel_fov);
+    w.prob.copyTo(w.raw);  // before smoothing: how solidly a region is tool-coloured
     cv::GaussianBlur(w.prob, w.prob, cv::Size(5, 5), 1.2);
     cv::threshold(w.prob, w.binary, params_.threshold - 1, 255, cv::THRESH_BINARY);
     cv::bitwise_and(w.binary, w.lit, w.binary);
@@ -413,13 +420,15 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
                        segment_distance(entry[1 - j], predicted[other], p->x, p->y) <
                            0.5 * w.tracks[other].width + 1.5;
             };
-            double lo = std::numeric_limits<double>::max(), hi = -lo, hi_seen = -lo, psum = 0;
+            double lo = std::numeric_limits<double>::max(), hi = -lo, hi_seen = -lo, psum = 0,
+                   solid = 0;
             for (const Px* p = begin; p != end; ++p)
                 if (mine(p)) {
                     const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
                     lo = std::min(lo, t), hi = std::max(hi, t);
                     if (!hidden(p)) hi_seen = std::max(hi_seen, t);
                     psum += w.prob.at<std::uint8_t>(p->y, p->x);
+                    solid += w.raw.at<std::uint8_t>(p->y, p->x) >= params_.threshold;
                 }
             const bool end_hidden = other >= 0 && hi_seen > lo && hi_seen < hi;
             if (end_hidden) hi = hi_seen;
@@ -489,6 +498,9 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             };
             c.has_edges = run_track[j] < 0 && fit_side(s_min, c.e1) && fit_side(s_max, c.e2);
             c.confidence = std::clamp(psum / nj / 255.0, 0.0, 1.0);
+            // A tool is solidly tool-coloured before the smoothing; specular glints on wet
+            // tissue are speckle that the blur joins up into a region.
+            c.solid = solid >= params_.min_solid_fraction * nj;
             c.split = lines > 1;
             c.end_hidden = end_hidden;
             c.track = run_track[j];
@@ -498,14 +510,9 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             w.candidates.push_back(c);
         }
     }
-    std::sort(w.candidates.begin(), w.candidates.end(),
-              [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
-    const std::size_t found = std::min({w.candidates.size(), params_.max_tools, kMaxTools});
-
     // Identities: candidates to live tracks, the assignment of least summed cost (tip
     // distance to the prediction in widths, plus the turn of the axis in units of
     // kAngleGateDeg); a candidate cut out by a track's prediction belongs to it.
-    std::array<int, kMaxTools> track_of{-1, -1};
     auto pair_cost = [&](const Candidate& c, std::size_t t) {
         const Track& tr = w.tracks[t];
         if (c.track >= 0 && static_cast<std::size_t>(c.track) != t) return 1e9;
@@ -514,6 +521,17 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
                    std::max(2.0, tr.width) +
                angle_diff_deg(a, tr.angle.position()) / kAngleGateDeg;
     };
+    // No track is born from a region short of solid; it may only continue one.
+    std::erase_if(w.candidates, [&](const Candidate& c) {
+        if (c.solid) return false;
+        for (std::size_t t = 0; t < nt; ++t)
+            if (w.tracks[t].id >= 0 && pair_cost(c, t) <= kContinuationCost) return false;
+        return true;
+    });
+    std::sort(w.candidates.begin(), w.candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
+    const std::size_t found = std::min({w.candidates.size(), params_.max_tools, kMaxTools});
+    std::array<int, kMaxTools> track_of{-1, -1};
     double best = std::numeric_limits<double>::max();
     for (int perm = 0; perm < (nt < 2 ? 1 : 2); ++perm) {
         std::array<int, kMaxTools> pick{-1, -1};

@@ -321,5 +321,48 @@ TEST(LikelihoodToolTracker, IgnoresGreyThatDoesNotEnterFromTheRim) {
     EXPECT_EQ(untrained.track(view(img), out), 0u);
 }
 
+// Specular glints on wet tissue: tool-grey speckle (2x2 dots, 65 % of a band running in
+// from the rim) that the 5x5 blur joins into one elongated region. Not solid (85 % of
+// it tool-coloured before the blur), so no track is born from it.
+void speckle_band(cv::Mat& img, Point2 from, double dir_deg, double length, double width) {
+    const double a = dir_deg * M_PI / 180, ux = std::cos(a), uy = std::sin(a);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int y = 0; y < img.rows; y += 2)
+        for (int x = 0; x < img.cols; x += 2) {
+            const double t = (x - from.x) * ux + (y - from.y) * uy,
+                         o = -(x - from.x) * uy + (y - from.y) * ux;
+            if (t < 0 || t > length || std::abs(o) > width / 2 || u(rng) > 0.65) continue;
+            if (std::hypot(x - 320, y - 240) >= 229) continue;
+            img(cv::Rect(x, y, 2, 2)).setTo(cv::Scalar(128, 126, 124));
+        }
+}
+
+TEST(LikelihoodToolTracker, GlintSpeckleIsNoToolButDoesNotCostATrackedTool) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    // Speckle from the tip (250, 200) out to the rim, up and left: without the solidity
+    // rule it is an elongated grey region entering from the rim, a tool.
+    cv::Mat glints = scope_frame({});
+    speckle_band(glints, {250, 200}, 225, 200, 24);
+    tracker.configure(view(glints).format);
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    for (int k = 0; k < 5; ++k) EXPECT_EQ(tracker.track(view(glints), out), 0u) << k;
+    // A tracked tool that the speckle then touches along its side (a region only about
+    // 83 % solid) goes on as the same tool, tip and axis unchanged.
+    const Shaft s{{330, 260}, 0, 24};
+    cv::Mat tool = scope_frame({s});
+    ASSERT_EQ(tracker.track(view(tool), out), 1u);
+    const int id = out[0].id;
+    cv::Mat touched = tool.clone();
+    speckle_band(touched, {340, 296}, 0, 200, 48);
+    for (int k = 0; k < 5; ++k) {
+        out = {};
+        ASSERT_EQ(tracker.track(view(touched), out), 1u) << k;
+        EXPECT_EQ(out[0].id, id) << k;
+        EXPECT_LT(std::hypot(out[0].tip.x - s.tip.x, out[0].tip.y - s.tip.y), s.width) << k;
+        EXPECT_LT(angle_diff(out[0].axis_deg, s.dir_deg), 10.0) << k;
+    }
+}
+
 }  // namespace
 }  // namespace endotower::vision

@@ -6,11 +6,13 @@
 // above `surround_fraction` (0.35) x the frame's median grey and above `surround_level`
 // (12), eroded by `surround_margin_px`); a 5x5 Gaussian; threshold at
 // `threshold` (128 = even odds); a 3x3 opening; 8-connected regions. A region is a tool
-// when its area is at least `min_area_fraction` of the frame, its length (principal
-// axis, from the second moments) at least `min_elongation` x its width, and one end,
-// not both, lies within `border_touch_fraction` x the frame width of the edge of the
-// lit area or the image border (tools come in through the incision; a band with both
-// ends there lies along the edge). Where one region meets the rim in two places (two
+// when at least `min_solid_fraction` (0.85) of its pixels are at even odds before the
+// blur (glint speckle on wet tissue is not), its area is at least `min_area_fraction`
+// of the frame, its length (principal axis, from the second moments) at least
+// `min_elongation` x its width, and one end, not both, lies within
+// `border_touch_fraction` x the frame width of the edge of the lit area or the image
+// border (tools come in through the incision; a band with both ends there lies along
+// the edge). Where one region meets the rim in two places (two
 // tools touching or crossing) and not both are tracked, it is split by two lines
 // fitted alternately to the pixels nearer each (k-lines), when the smaller entry is
 // at least `min_entry_ratio` (0.2) of the larger. The
@@ -46,6 +48,7 @@ struct LikelihoodToolTrackerParams {
     int surround_margin_px = 3;
     double min_area_fraction = 0.004;
     double min_elongation = 2.0;
+    double min_solid_fraction = 0.85;  // of a region, tool-coloured before the blur
     double border_touch_fraction = 0.06;
     double min_entry_ratio = 0.2;  // a second rim entry counts when >= this x the first
     double head_widths = 2.7;      // median on simulator training scenes (docs/tracking.md)
