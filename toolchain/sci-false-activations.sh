@@ -7,8 +7,10 @@
 # longest time spent activating (the hold needs 3 s).
 # Inputs: the real cholecystectomy clip ../shared/data/sznitman_lap (skipped when
 # absent), the bundled clip, and the table 4.1 scene suites rendered at FRAMES frames
-# each (default 125 = 5 s at 25 fps; longer than the 3 s hold).
-# Usage: [ENDOTOWER=BINARY] toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
+# each (default 125 = 5 s at 25 fps; longer than the 3 s hold), and SURGERY chunks of
+# board/sim/scenarios/surgery_motion.yaml (two tools working, crossing, holding; 1500
+# frames = 60 s each, seeds 1..SURGERY; frames deleted after the replay, traces kept).
+# Usage: [ENDOTOWER=BINARY] [SURGERY=N] toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_false}
@@ -24,12 +26,25 @@ for s in t41_speed_0_4 t41_speed_4_8 t41_speed_8_up t41_distractors t41_light_0_
         --out "$out/scene_$s" >/dev/null
     inputs+=("$s=$out/scene_$s/frames")
 done
+for ((k = 1; k <= ${SURGERY:-0}; ++k)); do
+    inputs+=("surgery_$k=$out/scene_surgery_$k/frames")
+done
 total_s=0
 total_act=0
-printf "%-20s %8s %12s %12s %16s\n" input seconds activations near_misses longest_hold_s
+printf "%-20s %8s %12s %12s %16s  %s\n" input seconds activations near_misses longest_hold_s gestures_fired
 for entry in "${inputs[@]}"; do
     name=${entry%%=*}
     input=${entry#*=}
+    if [[ $name == surgery_* && -f $out/$name.jsonl.sum ]]; then
+        read -r s a < "$out/$name.jsonl.sum"   # already replayed (its frames are gone)
+        total_s=$(python3 -c "print($total_s + $s)")
+        total_act=$((total_act + a))
+        continue
+    fi
+    if [[ $name == surgery_* ]]; then
+        "$bin" scene --scenario "$root/board/sim/scenarios/surgery_motion.yaml" --seed "${name#surgery_}" --frames 1500 \
+            --out "$out/scene_$name" >/dev/null
+    fi
     "$bin" sim --board "$root/board/sim/board.yaml" --input "$input" --events "" --out "$out/$name.avi" \
         --trace "$out/$name.jsonl" >/dev/null
     python3 - "$out/$name.jsonl" "$name" <<'PY'
@@ -45,9 +60,17 @@ for l in lines:
     longest = max(longest, run)
 period = (lines[1]["capture_ns"] - lines[0]["capture_ns"]) / 1e9
 secs = (lines[-1]["capture_ns"] - lines[0]["capture_ns"]) / 1e9 + (lines[1]["capture_ns"] - lines[0]["capture_ns"]) / 1e9
-print("%-20s %8.2f %12d %12d %16.2f" % (sys.argv[2], secs, act, near, longest * period))
+# Gestures held long enough to fire (a cross fired is the quadrant menu's trigger).
+fired = {}
+for l in lines:
+    g = l.get("gesture") or {}
+    if g.get("fired"):
+        fired[g["label"]] = fired.get(g["label"], 0) + 1
+print("%-20s %8.2f %12d %12d %16.2f  %s" % (sys.argv[2], secs, act, near, longest * period,
+      " ".join("%s=%d" % kv for kv in sorted(fired.items())) or "-"))
 open(sys.argv[1] + ".sum", "w").write("%f %d\n" % (secs, act))
 PY
+    [[ $name == surgery_* ]] && rm -rf "$out/scene_$name" "$out/$name.avi"
     read -r s a < "$out/$name.jsonl.sum"
     total_s=$(python3 -c "print($total_s + $s)")
     total_act=$((total_act + a))
