@@ -6,16 +6,30 @@
 namespace endotower::vision {
 
 GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns, double still_px) {
-    const bool same = label >= 0 && label == label_ &&
-                      std::hypot(where.x - anchor_.x, where.y - anchor_.y) <= still_px;
-    if (!same) {
-        label_ = label;
-        anchor_ = where;
-        start_ns_ = t_ns;
-        fired_ = false;
+    const auto near = [still_px](Point2 a, Point2 b) {
+        return std::hypot(a.x - b.x, a.y - b.y) <= still_px;
+    };
+    const auto restart = [&](int l, Point2 at, hal::Nanos since) {
+        label_ = l, anchor_ = seen_ = at, start_ns_ = since, agreed_ns_ = t_ns, fired_ = false;
+        pending_ = -1;
+    };
+    if (label == label_ && label >= 0) {
+        if (near(where, anchor_))
+            agreed_ns_ = t_ns, seen_ = where, pending_ = -1;
+        else
+            restart(label, where, t_ns);  // moved: a new hold
+    } else if (label_ < 0) {
+        restart(label, where, t_ns);
+    } else {
+        // Another label (or none): the new one's hold dates from its first frame.
+        if (label != pending_ || (label >= 0 && !near(where, pending_anchor_)))
+            pending_ = label, pending_anchor_ = where, pending_ns_ = t_ns;
+        if (static_cast<double>(t_ns - agreed_ns_) / 1e6 > params_.dropout_ms)
+            restart(label, pending_anchor_, pending_ns_);
     }
     State s;
     s.label = label_;
+    s.where = seen_;
     if (label_ < 0) return s;
     s.held_ms = static_cast<double>(t_ns - start_ns_) / 1e6;
     if (!fired_ && s.held_ms >= params_.hold_ms) s.fired = fired_ = true;
@@ -44,8 +58,12 @@ void GestureStage::process(app::AnalysisContext& ctx) {
     const GestureHold::State s =
         hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},
                      ctx.frame.capture_ns, still_px_);
+    // Through a dropout the held gesture stays where it was last seen.
+    const bool seen = one && results[which].label == s.label;
     current_ = {s.label, one ? results[which].confidence : 0.0, s.held_ms, s.fired,
-                one ? blobs_[which].tip : Point2{}};
+                seen           ? blobs_[which].tip
+                : s.label >= 0 ? s.where
+                               : Point2{}};
 
     ctx.trace.begin_object("gesture");
     if (s.label >= 0)

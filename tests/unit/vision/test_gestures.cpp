@@ -106,7 +106,7 @@ TEST(GestureHold, FiresOnceAfterExactlyTheHoldTime) {
 }
 
 TEST(GestureHold, MovingOrChangingRestartsAndNoneNeverFires) {
-    GestureHold hold({200.0, 0.03});
+    GestureHold hold({200.0, 0.03, 0.0});  // no dropout tolerance
     const hal::Nanos ms = 1'000'000;
     EXPECT_DOUBLE_EQ(hold.update(1, {0, 0}, 0, 5.0).held_ms, 0.0);
     EXPECT_DOUBLE_EQ(hold.update(1, {4, 3}, 150 * ms, 5.0).held_ms, 150.0);  // 5 px: still
@@ -118,6 +118,37 @@ TEST(GestureHold, MovingOrChangingRestartsAndNoneNeverFires) {
         const GestureHold::State s = hold.update(-1, {6, 0}, (500 + 100 * i) * ms, 5.0);
         EXPECT_FALSE(s.fired);
         EXPECT_EQ(s.label, -1);
+    }
+}
+
+// A misclassified frame or three (<= dropout_ms) do not restart the hold: it fires at
+// exactly 1 s all the same. A real change of label, held on, dates from its first frame.
+TEST(GestureHold, ShortDropoutsKeepTheHoldARealChangeDatesFromItsFirstFrame) {
+    GestureHold hold({1000.0, 0.03, 200.0});
+    const hal::Nanos frame = 40'000'000;  // 25 fps
+    int fired_at = -1;
+    for (int i = 0; i < 60; ++i) {
+        // Frames 10-12 unclassified, 18 another label; from 30 on, label 4 for good.
+        const int label = i >= 30 ? 4 : (i >= 10 && i <= 12) ? -1 : i == 18 ? 3 : 2;
+        const GestureHold::State s = hold.update(label, {100.0, 50.0}, i * frame, 5.0);
+        if (i < 35) {
+            EXPECT_EQ(s.label, 2) << i;  // 30-34: 40-200 ms since label 2 was last seen
+            EXPECT_DOUBLE_EQ(s.held_ms, 40.0 * i) << i;
+        } else {
+            EXPECT_EQ(s.label, 4) << i;
+            EXPECT_DOUBLE_EQ(s.held_ms, 40.0 * (i - 30)) << i;
+        }
+        if (s.fired) {
+            EXPECT_TRUE(fired_at == -1 || (fired_at == 25 && i == 55)) << i;
+            fired_at = i;
+        }
+    }
+    EXPECT_EQ(fired_at, 55);  // label 2 at 25 (1000 ms), label 4 at 30 + 25
+    // Without the tolerance the first misclassified frame restarts it.
+    GestureHold strict({1000.0, 0.03, 0.0});
+    for (int i = 0; i < 12; ++i) {
+        const GestureHold::State s = strict.update(i == 10 ? -1 : 2, {100.0, 50.0}, i * frame, 5.0);
+        if (i == 11) EXPECT_DOUBLE_EQ(s.held_ms, 0.0);
     }
 }
 

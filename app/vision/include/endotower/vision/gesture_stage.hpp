@@ -7,8 +7,11 @@
 // A label below `min_confidence` (0.5) counts as none.
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
-// the hold began; moving or changing the label starts a new hold. Times are the
-// frames' capture times (exact on the virtual clock).
+// the hold began; moving starts a new hold. Another label (or none) for at most
+// `dropout_ms` (200) is a misclassified frame or two and the hold goes on; longer, and
+// the new label's hold is taken to have begun where it first appeared (so a real
+// change is not delayed). Times are the frames' capture times (exact on the virtual
+// clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
 //               "tools": [{"label", "confidence", "tip_px": [x, y]}]}
@@ -28,6 +31,7 @@ namespace endotower::vision {
 struct GestureHoldParams {
     double hold_ms = 1000.0;
     double still_fraction = 0.03;
+    double dropout_ms = 200.0;
 };
 
 class GestureHold {
@@ -36,6 +40,7 @@ public:
         int label = -1;  // -1: none
         double held_ms = 0;
         bool fired = false;  // true on the one frame the hold reaches hold_ms
+        Point2 where;        // where the held gesture was last seen (its tip)
     };
     explicit GestureHold(GestureHoldParams params = {}) : params_(params) {}
     // `still_px`: the tolerance in the caller's pixels (still_fraction x width).
@@ -44,9 +49,12 @@ public:
 private:
     GestureHoldParams params_;
     int label_ = -1;
-    Point2 anchor_;
-    hal::Nanos start_ns_ = 0;
+    Point2 anchor_, seen_;                     // where the hold began, where it was last seen
+    hal::Nanos start_ns_ = 0, agreed_ns_ = 0;  // the hold's start, its last agreeing frame
     bool fired_ = false;
+    int pending_ = -1;  // the other label seen since the last agreeing frame
+    Point2 pending_anchor_;
+    hal::Nanos pending_ns_ = 0;
 };
 
 struct GestureStageParams {
