@@ -8,8 +8,7 @@
 // three nearly collinear points or a flipped orientation refused; an adaptive number of
 // iterations for `confidence` (as OpenCV's); the best sample's inliers refitted by
 // least squares (DLT over all of them, then Levenberg-Marquardt on the reprojection
-// error), the inliers taken again from the refitted homography and refitted while their
-// number grows (at most 3 rounds).
+// error), and the inliers taken again from the refitted homography.
 // Deterministic: the random generator is seeded from `seed` on every call, so the same
 // input gives the same result. No exceptions and no allocation: the inliers are counted
 // and refitted in passes over the pairs, without buffers.
@@ -30,7 +29,7 @@ struct RansacParams {
     int max_iterations = 500;
     double confidence = 0.995;
     std::uint64_t seed = 0x5eed'cafe'f00d'1234ULL;
-    int refine_iterations = 10;  // Levenberg-Marquardt steps of each refit
+    int refine_iterations = 10;  // Levenberg-Marquardt steps of the refit
 };
 
 class RansacHomography {

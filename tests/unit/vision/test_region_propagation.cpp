@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -305,42 +306,37 @@ TEST(RansacHomography, RecoversAKnownHomographyWithThirtyPercentOutliers) {
     EXPECT_DOUBLE_EQ(h(2, 2), 1.0);
 }
 
-// With 0.5 px noise: every inlier found, near the truth, and in agreement with OpenCV's
-// findHomography: both refit their inliers by least squares, so on the same inliers they
-// agree to a thousandth of a pixel; OpenCV's RANSAC at times leaves an inlier out (it
-// refits the sample's inliers once), which moves its fit by hundredths of a pixel and
-// makes its error over all the true inliers larger than this one's.
-TEST(RansacHomography, AgreesWithOpenCvOnNoisyPoints) {
-    int same_inliers = 0;
-    for (const std::uint64_t seed : {1, 2, 3, 4, 5}) {
-        const Pairs p = pairs(150, 0.5, seed);
-        RansacHomography r;
-        cv::Matx33d h;
-        std::vector<std::uint8_t> mask(p.from.size());
-        ASSERT_TRUE(r.fit(p.from, p.to, h, mask));
-        std::vector<std::uint8_t> cv_mask;
-        const cv::Matx33d cv_h(cv::findHomography(p.from, p.to, cv::RANSAC, 3.0, cv_mask));
-        double sq = 0, cv_sq = 0, apart = 0;
-        int inliers = 0;
-        for (std::size_t i = 0; i < mask.size(); ++i) {
-            EXPECT_NE(mask[i], p.outlier[i]) << seed << " pair " << i;
-            if (p.outlier[i]) continue;
-            const cv::Point2d d = map(h, p.from[i]) - cv::Point2d(p.to[i]),
-                              dc = map(cv_h, p.from[i]) - cv::Point2d(p.to[i]),
-                              between = map(h, p.from[i]) - map(cv_h, p.from[i]);
-            sq += d.dot(d), cv_sq += dc.dot(dc), apart += std::hypot(between.x, between.y);
-            ++inliers;
-        }
-        apart /= inliers;
-        EXPECT_LT(corner_distance(h, kTruth), 0.5) << seed;
-        EXPECT_LE(sq, cv_sq + 1e-6) << seed;
-        EXPECT_LT(apart, 0.1) << seed;
-        if (cv::countNonZero(cv_mask) == inliers) {
-            ++same_inliers;
-            EXPECT_LT(apart, 1e-3) << seed;
+// With 0.5 px noise: every inlier found and no outlier, the fit near the truth and near
+// OpenCV's findHomography over the inliers (each refits the inliers of its own best
+// sample, so the two differ by the noise: about sigma / sqrt(inliers / 8)). On exact
+// points the two agree to a thousandth of a pixel.
+TEST(RansacHomography, AgreesWithOpenCv) {
+    for (const double noise : {0.0, 0.5}) {
+        for (const std::uint64_t seed : {1, 2, 3, 4, 5}) {
+            const Pairs p = pairs(150, noise, seed);
+            RansacHomography r;
+            cv::Matx33d h;
+            std::vector<std::uint8_t> mask(p.from.size());
+            ASSERT_TRUE(r.fit(p.from, p.to, h, mask));
+            const cv::Matx33d cv_h(cv::findHomography(p.from, p.to, cv::RANSAC, 3.0));
+            double from_truth = 0, from_cv = 0;
+            int inliers = 0;
+            for (std::size_t i = 0; i < mask.size(); ++i) {
+                EXPECT_NE(mask[i], p.outlier[i]) << seed << " pair " << i;
+                if (p.outlier[i]) continue;
+                const cv::Point2d q = map(h, p.from[i]), t = map(kTruth, p.from[i]),
+                                  c = map(cv_h, p.from[i]);
+                from_truth += std::hypot(q.x - t.x, q.y - t.y);
+                from_cv += std::hypot(q.x - c.x, q.y - c.y);
+                ++inliers;
+            }
+            from_truth /= inliers, from_cv /= inliers;
+            std::printf("noise %.1f seed %d: %.4f px from the truth, %.4f px from OpenCV's\n",
+                        noise, static_cast<int>(seed), from_truth, from_cv);
+            EXPECT_LT(from_truth, noise > 0 ? 0.3 : 1e-4) << seed;
+            EXPECT_LT(from_cv, noise > 0 ? 0.15 : 1e-3) << seed;
         }
     }
-    EXPECT_GE(same_inliers, 1);
 }
 
 TEST(RansacHomography, TheSameInputGivesTheSameResult) {
