@@ -1,6 +1,8 @@
 // Region-tracking benchmarks (docs/regions.md, docs/performance.md), median and p99:
 //  - propagation: the per-frame cost of keeping a marked region anchored at 1920x1080
-//    (LK on the region's points + RANSAC homography), drift correction off;
+//    (LK on the region's points + RANSAC homography), drift correction off, and its heap
+//    allocations per frame (allocs_per_frame: operator new; c_allocs_per_frame: the C
+//    allocator, where OpenCV's buffers come from, operator new's included);
 //  - keyframe matching per descriptor at 640x480 and 1920x1080: in a window around
 //    the region (drift correction, while tracked) and over the whole frame (recovery,
 //    while lost);
@@ -18,6 +20,8 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "alloc_counter.hpp"
+#include "c_alloc_counter.hpp"
 #include "endotower/vision/region_tracker.hpp"
 #include "region_test_util.hpp"
 
@@ -77,16 +81,23 @@ void BM_RegionPropagation1080p(benchmark::State& state) {
     tracker.track(view(frames[1], 1), out);  // the first frame after marking is matched: not timed
     std::vector<double> ms;
     std::size_t i = 2, tracked = 0;
+    std::int64_t allocs = 0, c_allocs = 0;
     for (auto _ : state) {
         const std::size_t k = i % 38, index = k < 20 ? k : 38 - k;
         hal::Frame f = view(frames[index], i++);
+        // Counted around track() only: the benchmark library and `ms` allocate between.
+        const std::int64_t a0 = bench::allocations(), c0 = bench::c_allocations();
         const auto t0 = std::chrono::steady_clock::now();
         tracker.track(f, out);
-        ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count());
+        const auto t1 = std::chrono::steady_clock::now();
+        allocs += bench::allocations() - a0;
+        c_allocs += bench::c_allocations() - c0;
+        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
         tracked += out[0].state == vision::RegionState::kTracked && !out[0].keyframe_match;
     }
+    const auto n = static_cast<double>(ms.size());
+    state.counters["allocs_per_frame"] = static_cast<double>(allocs) / n;
+    state.counters["c_allocs_per_frame"] = static_cast<double>(c_allocs) / n;
     report(state, ms, tracked);
 }
 BENCHMARK(BM_RegionPropagation1080p)->Unit(benchmark::kMillisecond)->MinTime(3.0);

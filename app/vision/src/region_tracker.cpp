@@ -2,19 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/video/tracking.hpp>
 #include <vector>
 
+#include "high_pass_window.hpp"
+#include "pyramid_lk.hpp"
+#include "ransac_homography.hpp"
 #include "region_matching.hpp"
 
 namespace endotower::vision {
 
 namespace {
 
-constexpr int kLkWindow = 15;
-constexpr int kLkLevels = 3;
+// LK: a 15x15 window, levels 0..3 (OpenCV's maxLevel 3), 20 iterations, 0.03 px.
+constexpr detail::LkParams kLk{.window = 15, .max_level = 3, .max_iterations = 20, .epsilon = 0.03};
 // Detections keep the strongest features: matching is brute force, so its cost is
 // the product of the two counts.
 constexpr int kFrameFeatures = 1000;
@@ -148,12 +149,15 @@ struct RegionTracker::Impl {
     explicit Impl(RegionTrackerParams params)
         : p(params),
           keyframe_detector(p.descriptor, p.detect_max_width, kKeyframeFeatures),
-          frame_detector(p.descriptor, p.detect_max_width, kFrameFeatures) {}
+          frame_detector(p.descriptor, p.detect_max_width, kFrameFeatures),
+          high_pass(kShadingBox),
+          lk(kLk) {}
 
     bool plausible(const Region& r, const cv::Matx33d& h, cv::Size frame,
                    std::vector<cv::Point2f>& poly) const;
     bool propagate(Region& r, cv::Size frame);
-    void build_pyramid(const hal::Frame& f, cv::Rect roi, std::vector<cv::Mat>& pyr);
+    void build_pyramid(const hal::Frame& f, cv::Rect roi, detail::LkPyramid& pyr);
+    void reserve_points(std::size_t n);
     const cv::Mat& full_gray();
     bool match(Region& r, const cv::Mat& gray, bool whole, const std::vector<cv::Point2f>& around);
     void reseed(Region& r, cv::Size frame, bool keep_followed);
@@ -167,9 +171,15 @@ struct RegionTracker::Impl {
     const hal::Frame* current = nullptr;
     cv::Size last_size;
     cv::Rect window_rect, prev_window;
-    cv::Mat gray, window_gray, mask, shading, detail;
+    cv::Mat gray, mask;
     bool gray_ready = false;
-    std::vector<cv::Mat> pyramid, prev_pyramid;
+    // The propagation's own image pipeline, LK and RANSAC: OpenCV's allocate per call
+    // (docs/regions.md "Speed"); these are sized once per frame size, then reused.
+    detail::HighPassWindow high_pass;
+    detail::LkPyramid pyramid, prev_pyramid;
+    cv::Size reserved_size;
+    detail::PyramidLk lk;
+    detail::RansacHomography ransac;
     detail::FeatureSet whole_frame, window;
     bool whole_frame_ready = false;
     detail::KeyframeMatch matched;
@@ -177,7 +187,6 @@ struct RegionTracker::Impl {
     std::vector<int> kept_index;
     std::vector<cv::Point2f> offsets;
     std::vector<std::uint8_t> lk_status, inlier_mask, followed;
-    std::vector<float> lk_error;
 };
 
 bool RegionTracker::Impl::plausible(const Region& r, const cv::Matx33d& h, cv::Size frame,
@@ -201,21 +210,29 @@ bool RegionTracker::Impl::plausible(const Region& r, const cv::Matx33d& h, cv::S
     return box.area() > 0 && seen.area() >= kMinVisible * box.area();
 }
 
-void RegionTracker::Impl::build_pyramid(const hal::Frame& f, cv::Rect roi,
-                                        std::vector<cv::Mat>& pyr) {
-    to_gray(f, roi, window_gray);
-    // Frames wider than kLkMaxWidth are followed at reduced size: the same texture
-    // scale for LK whatever the input, and a quarter of the work at 1080p.
-    const double s = lk_scale(f.format.width);
-    if (s < 1.0) {
-        cv::resize(window_gray, shading, cv::Size(), s, s, cv::INTER_AREA);
-        std::swap(shading, window_gray);
+// Frames wider than kLkMaxWidth are followed at reduced size: the same texture scale
+// for LK whatever the input, and a quarter of the work at 1080p. LK follows the texture,
+// not the light: the endoscope carries its light, so shading moves with the camera and
+// would drag the points (a high-pass image, HighPassWindow). The buffers are sized for
+// the whole frame when its size changes, so a window of any size reuses them.
+void RegionTracker::Impl::build_pyramid(const hal::Frame& f, cv::Rect roi, detail::LkPyramid& pyr) {
+    const cv::Size size(f.format.width, f.format.height);
+    if (size != reserved_size) {
+        high_pass.reserve(size.width, size.height, lk_scale(size.width));
+        const cv::Size lk_size = high_pass.scaled(size);
+        pyramid.reserve(lk_size.width, lk_size.height, kLk);
+        prev_pyramid.reserve(lk_size.width, lk_size.height, kLk);
+        reserved_size = size;
     }
-    // LK follows the texture, not the light: the endoscope carries its light, so
-    // shading moves with the camera and would drag the points (a high-pass image).
-    cv::blur(window_gray, shading, cv::Size(kShadingBox, kShadingBox));
-    cv::addWeighted(window_gray, 1.0, shading, -1.0, 128.0, detail);
-    cv::buildOpticalFlowPyramid(detail, pyr, cv::Size(kLkWindow, kLkWindow), kLkLevels);
+    high_pass.build(f, roi, pyr);
+}
+
+// The per-frame buffers for regions of up to n followed points (allocates, in mark()).
+void RegionTracker::Impl::reserve_points(std::size_t n) {
+    n = std::max(n, RegionEstimate::kMaxVertices);
+    for (auto* v : {&lk_prev, &lk_next, &kept_kf, &kept_cur, &candidate, &offsets}) v->reserve(n);
+    for (auto* v : {&lk_status, &inlier_mask, &followed}) v->reserve(n);
+    kept_index.reserve(n);
 }
 
 const cv::Mat& RegionTracker::Impl::full_gray() {
@@ -232,10 +249,9 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
                              static_cast<float>(window_rect.y) - 0.5f + 0.5f / s);
     lk_prev.clear();
     for (const cv::Point2f& q : r.cur_pts) lk_prev.push_back((q - origin) * s);
-    cv::calcOpticalFlowPyrLK(
-        prev_pyramid, pyramid, lk_prev, lk_next, lk_status, lk_error,
-        cv::Size(kLkWindow, kLkWindow), kLkLevels,
-        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.03));
+    lk_next.resize(lk_prev.size());
+    lk_status.resize(lk_prev.size());
+    lk.track(prev_pyramid, pyramid, lk_prev, lk_next, lk_status);
     kept_kf.clear();
     kept_cur.clear();
     kept_index.clear();
@@ -248,13 +264,13 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
         kept_index.push_back(r.track_index[i]);
     }
     if (kept_kf.size() < static_cast<std::size_t>(std::max(4, p.min_inliers))) return false;
-    const cv::Mat h =
-        cv::findHomography(kept_kf, kept_cur, cv::RANSAC, p.ransac_px / s, inlier_mask, 500, 0.995);
-    if (h.empty()) return false;
+    inlier_mask.resize(kept_kf.size());
+    ransac.set_threshold(p.ransac_px / s);
+    cv::Matx33d h;
+    if (!ransac.fit(kept_kf, kept_cur, h, inlier_mask)) return false;
     // The homography's inliers are followed. So is a point off it by up to a bend's
     // amount whose offset matches its neighbours' (a smooth bend moves a patch of
     // tissue together); a point alone in its offset is LK losing its texture: dropped.
-    const cv::Matx33d hm(h);
     const double size = std::sqrt(std::abs(r.kf_area));
     const double bend_px = kBendFraction * size,
                  inv2s2 = 1.0 / (2 * kBendSigma * size * kBendSigma * size);
@@ -262,11 +278,10 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
     offsets.resize(kept_kf.size());
     for (std::size_t i = 0; i < kept_kf.size(); ++i) {
         const cv::Point2f& v = kept_kf[i];
-        const double w = hm(2, 0) * v.x + hm(2, 1) * v.y + hm(2, 2);
-        offsets[i] =
-            kept_cur[i] -
-            cv::Point2f(static_cast<float>((hm(0, 0) * v.x + hm(0, 1) * v.y + hm(0, 2)) / w),
-                        static_cast<float>((hm(1, 0) * v.x + hm(1, 1) * v.y + hm(1, 2)) / w));
+        const double w = h(2, 0) * v.x + h(2, 1) * v.y + h(2, 2);
+        offsets[i] = kept_cur[i] -
+                     cv::Point2f(static_cast<float>((h(0, 0) * v.x + h(0, 1) * v.y + h(0, 2)) / w),
+                                 static_cast<float>((h(1, 0) * v.x + h(1, 1) * v.y + h(1, 2)) / w));
     }
     r.kf_pts.clear();
     r.cur_pts.clear();
@@ -295,9 +310,9 @@ bool RegionTracker::Impl::propagate(Region& r, cv::Size frame) {
     // that happen to agree would be wrong.
     if (r.inliers < p.min_inliers ||
         static_cast<double>(r.kf_pts.size()) < kMinAgreeing * static_cast<double>(lk_next.size()) ||
-        !plausible(r, cv::Matx33d(h), frame, candidate))
+        !plausible(r, h, frame, candidate))
         return false;
-    r.homography = cv::Matx33d(h);
+    r.homography = h;
     r.rigid = candidate;
     r.polygon = candidate;
     if (p.bend) bend(r);
@@ -460,8 +475,6 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
                 "): mark a larger or more textured region";
         return false;
     }
-    r.polygon = r.kf_polygon;
-    r.rigid = r.kf_polygon;
     // LK follows Shi-Tomasi corners spread over the region: more points than a small
     // region has descriptors, and points LK locates well. Their number bounds its cost.
     cv::goodFeaturesToTrack(g(roi), r.kf_track, kTrackCorners, 0.005,
@@ -470,9 +483,17 @@ bool RegionTracker::mark(int id, std::span<const Point2> polygon, const hal::Fra
         c += cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
     if (r.kf_track.size() < static_cast<std::size_t>(m.p.min_inliers))
         for (const cv::KeyPoint& k : r.keyframe.keypoints) r.kf_track.push_back(k.pt);
+    // Propagation's buffers, sized once: it allocates nothing per frame.
+    const std::size_t points = r.kf_track.size();
+    for (auto* v : {&r.kf_pts, &r.cur_pts}) v->reserve(points);
+    for (auto* v : {&r.polygon, &r.rigid}) v->reserve(RegionEstimate::kMaxVertices);
+    r.track_index.reserve(points);
+    m.reserve_points(points);
     r.kf_pts = r.kf_track;
     r.cur_pts = r.kf_pts;
     r.track_index.resize(r.kf_track.size());
+    r.polygon = r.kf_polygon;
+    r.rigid = r.kf_polygon;
     for (std::size_t j = 0; j < r.kf_track.size(); ++j) r.track_index[j] = static_cast<int>(j);
     r.inliers = static_cast<int>(r.kf_pts.size());
     r.mark_sequence = frame.sequence;

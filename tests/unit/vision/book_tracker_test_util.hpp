@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "endotower/vision/tool_tracker.hpp"
+#include "heap_counter.hpp"
 
 namespace endotower::vision::test {
 
@@ -61,11 +62,5 @@ inline double tip_error(const ToolEstimate& e, const ShaftTruth& t) {
 inline double axis_error_deg(const ToolEstimate& e, const ShaftTruth& t) {
     return std::abs(std::remainder(e.axis_deg - t.axis_deg(), 360.0));
 }
-
-// operator new calls (the project's per-frame rule) and, apart, C allocator calls
-// (OpenCV's internal buffers), counted while set_counting(true) is in force.
-long heap_allocations();
-long c_allocations();
-void set_counting(bool on);
 
 }  // namespace endotower::vision::test

@@ -1,15 +1,16 @@
 // Counts heap allocations of the whole process, separately: operator new (C++
 // allocations, the project's rule) and the C allocator (OpenCV's internal buffers
 // come from posix_memalign), by replacing operator new and interposing glibc's malloc
-// family over its __libc_ entry points. Only linked into test_book_trackers.
+// family over its __libc_ entry points. Linked into test_book_trackers and
+// test_region_propagation.
 // Under ASan/TSan the sanitizer owns malloc: the C allocator is not interposed there
 // and neither is operator new: both counts read -1 (the tests then do not assert them).
+#include "heap_counter.hpp"
+
 #include <atomic>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
-
-#include "book_tracker_test_util.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define ENDOTOWER_SANITIZED 1

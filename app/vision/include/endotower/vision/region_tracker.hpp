@@ -7,7 +7,7 @@
 // track(), every frame:
 //   propagation  pyramidal Lucas-Kanade moves the region's features from the previous
 //                frame; a RANSAC homography from their keyframe positions (eq. 6.4-6.5)
-//                places the polygon. About a millisecond at 1080p.
+//                places the polygon. About 1.5 ms at 1080p; no heap allocation.
 //   keyframe     the keyframe's descriptors are matched by brute force (L2 / Hamming)
 //   matching     against the frame's: Lowe's ratio test, then the book's filter (keep
 //                matches shorter than the average distance), RANSAC homography. Runs on
@@ -22,8 +22,10 @@
 //   20 % of the region's size): the outline follows a push or a fold; under rigid motion
 //   the offsets are noise and the outline stays the homography's.
 // A region is lost when fewer than min_inliers features agree or the homography is
-// implausible (flipped, collapsed, or the polygon out of the picture). OpenCV's
-// detectors, LK and RANSAC allocate internally; the tracker's own buffers are reused.
+// implausible (flipped, collapsed, or the polygon out of the picture). Propagation
+// allocates nothing in steady state (its LK, high-pass image and RANSAC are the
+// project's own, sized in mark() and on a frame size change: OpenCV's allocate per
+// call); keyframe matching (OpenCV's detectors and findHomography) allocates.
 #pragma once
 
 #include <array>
