@@ -5,10 +5,13 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "endotower/vision/block_mean.hpp"
+
 namespace endotower::vision {
 
 struct GestureSegmenter::Work {
     double scale = 1.0;
+    BlockMean reduce;  // the odd integer factors (1920 -> 640); others: cv::resize
     cv::Mat small, gray, blurred, lit, a, opened, binary, labels, stats, centroids, dist, window;
     cv::Mat large_element, small_element, open3, fov_element;
     struct Px {
@@ -31,6 +34,7 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     const int sw = std::max(1, static_cast<int>(std::lround(format.width * w.scale)));
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
+    w.reduce.configure(format.width, format.height, sw, sh, 3);
     for (cv::Mat* m : {&w.gray, &w.blurred, &w.lit, &w.a, &w.opened, &w.binary, &w.window})
         m->create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
@@ -56,25 +60,41 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (w.scale < 1.0)
+    if (w.reduce.ready())
+        w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
+    else if (w.scale < 1.0)
         cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
     else
         full.copyTo(w.small);
     const int W = w.small.cols, H = w.small.rows;
 
     // Luma (and the tool probability) per pixel; brightness histogram for the field of view.
-    std::array<int, 256> hist{};
+    // Four histograms in turn: runs of one grey value do not wait on one counter.
+    std::array<std::array<int, 256>, 4> hists{};
+    const bool like = params_.method == GestureSegmentation::kLikelihood;
+    const std::uint8_t* table = like ? model_->table().data() : nullptr;
     for (int y = 0; y < H; ++y) {
         const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
         std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
-        std::uint8_t* q = w.binary.ptr<std::uint8_t>(y);
-        const bool like = params_.method == GestureSegmentation::kLikelihood;
-        for (int x = 0; x < W; ++x, p += 3) {
+        int x = 0;
+        for (; x + 4 <= W; x += 4, p += 12)
+            for (int j = 0; j < 4; ++j) {
+                const auto v =
+                    static_cast<std::uint8_t>((p[3 * j] + p[3 * j + 1] + p[3 * j + 2]) / 3);
+                g[x + j] = v;
+                ++hists[j][v];
+            }
+        for (; x < W; ++x, p += 3) {
             g[x] = static_cast<std::uint8_t>((p[0] + p[1] + p[2]) / 3);
-            if (like) q[x] = model_->probability(p[0], p[1], p[2]);
-            ++hist[g[x]];
+            ++hists[0][g[x]];
         }
+        if (table == nullptr) continue;
+        p = w.small.ptr<std::uint8_t>(y);
+        std::uint8_t* q = w.binary.ptr<std::uint8_t>(y);
+        for (x = 0; x < W; ++x, p += 3) q[x] = table[ToolLikelihood::cell(p[0], p[1], p[2])];
     }
+    std::array<int, 256> hist{};
+    for (int v = 0; v < 256; ++v) hist[v] = hists[0][v] + hists[1][v] + hists[2][v] + hists[3][v];
     // The lit field of view (as LikelihoodToolTracker): brighter than 0.35 x the median
     // after a 9x9 mean, so a dark shaft inside it stays inside.
     int median = 0;
@@ -205,6 +225,14 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         ++found;
     }
     return found;
+}
+
+std::span<const std::uint8_t> GestureSegmenter::mask() const {
+    const cv::Mat& m = work_->binary;
+    return {m.data, m.total()};
+}
+int GestureSegmenter::mask_width() const {
+    return work_->binary.cols;
 }
 
 }  // namespace endotower::vision

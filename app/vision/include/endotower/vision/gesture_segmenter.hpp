@@ -68,6 +68,10 @@ public:
     const GestureSegmenterParams& params() const { return params_; }
     void configure(const hal::FrameFormat& format);
     std::size_t segment(const hal::Frame& frame, std::span<GestureBlob, kMaxBlobs> out);
+    // The last segment()'s tool mask at the analysis size (before the region filter):
+    // row-major, mask_width() bytes a row, 0 or 255; empty before configure().
+    std::span<const std::uint8_t> mask() const;
+    int mask_width() const;
 
 private:
     struct Work;
