@@ -38,6 +38,13 @@ void feret(const std::vector<cv::Point>& hull, double& max_d, double& min_d) {
     }
 }
 
+// std::lround without the library call: half away from zero (v - trunc(v) is exact).
+int round_half_away(double v) {
+    const long t = static_cast<long>(v);
+    const double f = v - static_cast<double>(t);
+    return static_cast<int>(f >= 0.5 ? t + 1 : f <= -0.5 ? t - 1 : t);
+}
+
 // 0<->1 changes along the line through (cx, cy) at `angle`, sampled every pixel
 // across the whole mask; outside the mask is 0.
 int changes_along(const std::uint8_t* mask, int w, int h, int stride, double cx, double cy,
@@ -47,8 +54,7 @@ int changes_along(const std::uint8_t* mask, int w, int h, int stride, double cx,
     int changes = 0;
     bool prev = false;
     for (int s = -reach; s <= reach; ++s) {
-        const int x = static_cast<int>(std::lround(cx + s * dx)),
-                  y = static_cast<int>(std::lround(cy + s * dy));
+        const int x = round_half_away(cx + s * dx), y = round_half_away(cy + s * dy);
         const bool on = x >= 0 && y >= 0 && x < w && y < h &&
                         mask[static_cast<std::size_t>(y) * stride + x] != 0;
         if (on != prev) ++changes;

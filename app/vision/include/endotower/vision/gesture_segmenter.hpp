@@ -23,7 +23,10 @@
 //     the six features are measured (GestureFeatures).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
-// allocated in configure().
+// allocated in configure(). Speed (docs/gestures.md): the reduction is BlockMean for odd
+// integer factors (cv::resize INTER_AREA otherwise), the mask operations MaskOps (each
+// the bytes of the OpenCV call it stands for), the probability only inside the lit field
+// (the rest cannot reach the mask), the distance transform only in each region's box.
 #pragma once
 
 #include <array>
