@@ -14,6 +14,7 @@ struct GestureSegmenter::Work {
     double scale = 1.0;
     BlockMean reduce;  // the odd integer factors (1920 -> 640); others: cv::resize
     MaskOps ops;
+    ContourTracer tracer;           // the features' contours (window <= the analysis size)
     std::array<int, 7> fov_rows{};  // the field-of-view element's rows as half-widths
     cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels, window;
     std::vector<std::uint32_t> dist;  // chamfer distances in one region's box
@@ -45,6 +46,7 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
         m->create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
     w.ops.configure(sw, sh);
+    w.tracer.reserve(sw, sh);
     w.dist.resize(static_cast<std::size_t>(sw) * sh);
     w.reach.resize(static_cast<std::size_t>(sw) * sh);
     const int big =
@@ -252,8 +254,8 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
                 win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
         }
         GestureBlob& b = out[found];
-        b.features =
-            measure_gesture_features(win.data, win.cols, win.rows, static_cast<int>(win.step));
+        b.features = measure_gesture_features(win.data, win.cols, win.rows,
+                                              static_cast<int>(win.step), w.tracer);
         if (!b.features.valid) continue;
         b.tip = {tx / w.scale, ty / w.scale};
         b.radius_px = radius / w.scale;

@@ -5,6 +5,8 @@
 // and fig. 3.23 at 1280x720 (cv::resize), likelihood segmentation with the shipped
 // model; one suite with the book's morphology.
 // ENDOTOWER_GOLDEN_DUMP=1 prints the table below from the current code instead.
+// Also: segmentation + features + classification allocate nothing per frame (operator
+// new and the C allocator counted, heap_counter.cpp; not under the sanitizers).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -13,11 +15,18 @@
 #include <vector>
 
 #include "endotower/scene/renderer.hpp"
+#include "endotower/vision/gesture_classifier.hpp"
 #include "endotower/vision/gesture_segmenter.hpp"
 #include "gesture_golden_table.hpp"
 
 using namespace endotower;
 using namespace endotower::vision;
+
+namespace endotower::vision::test {  // heap_counter.cpp
+long heap_allocations();
+long c_allocations();
+void set_counting(bool on);
+}  // namespace endotower::vision::test
 
 namespace {
 
@@ -131,4 +140,49 @@ TEST(GestureSegmenterGolden, SameMaskTipsAndFeaturesAsTheOpenCvImplementation) {
     if (!dump) {
         EXPECT_EQ(row, std::size(kGolden));
     }
+}
+
+TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
+    const std::string root = ENDOTOWER_SOURCE_DIR;
+    std::string error;
+    ToolLikelihood model;
+    GestureClassifier classifier;
+    ASSERT_TRUE(model.load(root + "/board/sim/models/tool_likelihood.bin", error)) << error;
+    ASSERT_TRUE(classifier.load(root + "/board/sim/models/gestures.yml", error)) << error;
+    scene::Scenario scenario;
+    ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml",
+                                     scenario, error))
+        << error;
+    scenario.width = 1920;
+    scenario.height = 1080;
+    scene::SceneRenderer renderer;
+    ASSERT_TRUE(renderer.init(scenario, 312, error)) << error;
+    std::vector<scene::Image> images(2);
+    scene::FrameTruth truth;
+    renderer.render(0, images[0], truth);
+    renderer.render(8, images[1], truth);
+    GestureSegmenter segmenter(&model, {});
+    const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
+    segmenter.configure(fmt);
+    std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs{};
+    auto run = [&](int frames) {
+        int classified = 0;
+        for (int i = 0; i < frames; ++i) {
+            hal::Frame f;
+            f.format = fmt;
+            f.data = images[static_cast<std::size_t>(i) % images.size()].bgr.data();
+            const std::size_t n = segmenter.segment(f, blobs);
+            for (std::size_t b = 0; b < n; ++b)
+                classified += classifier.classify(blobs[b].features).label >= 0;
+        }
+        return classified;
+    };
+    EXPECT_EQ(run(2), 4);  // warm: two tools a frame
+    test::set_counting(true);
+    const int classified = run(6);
+    test::set_counting(false);
+    EXPECT_EQ(classified, 12);
+    if (test::heap_allocations() < 0) GTEST_SKIP() << "allocations not counted (sanitizer)";
+    EXPECT_EQ(test::heap_allocations(), 0);
+    EXPECT_EQ(test::c_allocations(), 0);
 }
