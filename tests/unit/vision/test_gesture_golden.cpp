@@ -43,11 +43,11 @@ struct Suite {
 };
 constexpr Suite kSuites[] = {
     {"fig312_nonoverlapping", 1920, 1080, 0, 4, 4, GestureSegmentation::kLikelihood},
-    {"fig322_grasper_orientations", 1920, 1080, 0, 4, 7, GestureSegmentation::kLikelihood},
-    {"fig322_scissors_orientations", 1920, 1080, 1, 4, 7, GestureSegmentation::kLikelihood},
-    {"fig323_double_gestures", 1920, 1080, 0, 3, 14, GestureSegmentation::kLikelihood},
-    {"fig323_double_gestures", 1280, 720, 1, 6, 7, GestureSegmentation::kLikelihood},
-    {"fig312_nonoverlapping", 1920, 1080, 2, 4, 4, GestureSegmentation::kMorphology},
+    {"fig322_grasper_orientations", 1920, 1080, 0, 8, 4, GestureSegmentation::kLikelihood},
+    {"fig322_scissors_orientations", 1920, 1080, 1, 8, 4, GestureSegmentation::kLikelihood},
+    {"fig323_double_gestures", 1920, 1080, 0, 6, 7, GestureSegmentation::kLikelihood},
+    {"fig323_double_gestures", 1280, 720, 1, 12, 4, GestureSegmentation::kLikelihood},
+    {"fig312_nonoverlapping", 1920, 1080, 2, 8, 2, GestureSegmentation::kMorphology},
 };
 
 }  // namespace
