@@ -228,14 +228,29 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
             const double da = std::hypot(p.x - ax, p.y - ay);
             return nb > 0 ? std::min(da, std::hypot(p.x - bx2, p.y - by2)) : da;
         };
+        // sqrt(dx^2 + dy^2) is within a few ulp of hypot: hypot only where that could
+        // change the farthest reach or the 97 % cut.
+        auto approx = [&](const Work::Px& p) {
+            const double dx = p.x - ax, dy = p.y - ay, ex = p.x - bx2, ey = p.y - by2;
+            const double q = dx * dx + dy * dy;
+            return std::sqrt(nb > 0 ? std::min(q, ex * ex + ey * ey) : q);
+        };
+        constexpr double kSlack = 1e-12;
+        double far_approx = -1;
+        for (std::size_t i = 0; i < w.pixels.size(); ++i)
+            far_approx = std::max(far_approx, w.reach[i] = approx(w.pixels[i]));
         double far = -1;
         for (std::size_t i = 0; i < w.pixels.size(); ++i)
-            far = std::max(far, w.reach[i] = reach(w.pixels[i]));
+            if (w.reach[i] >= far_approx * (1 - kSlack)) far = std::max(far, reach(w.pixels[i]));
         // The tip: mean of the pixels within 3 % of the farthest reach.
+        const double cut = 0.97 * far;
         double tx = 0, ty = 0;
         int nt = 0;
-        for (std::size_t i = 0; i < w.pixels.size(); ++i)
-            if (w.reach[i] >= 0.97 * far) tx += w.pixels[i].x, ty += w.pixels[i].y, ++nt;
+        for (std::size_t i = 0; i < w.pixels.size(); ++i) {
+            const double r = w.reach[i];
+            if (r > cut * (1 + kSlack) || (r >= cut * (1 - kSlack) && reach(w.pixels[i]) >= cut))
+                tx += w.pixels[i].x, ty += w.pixels[i].y, ++nt;
+        }
         tx /= nt, ty /= nt;
         if (radius < 1.0f) radius = 1.0f;
         const double R = params_.window_radii * radius;

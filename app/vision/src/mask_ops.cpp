@@ -43,6 +43,7 @@ void MaskOps::configure(int width, int height) {
     const auto plane = static_cast<std::size_t>(width_) * height_;
     columns_.assign(width_, 0);
     padded_sums_.assign(width_ + 8, 0);
+    box_.assign(width_, 0);
     padded_.assign(width_ + 16, 0);
     spans_.assign(plane * 4, 0);  // up to four distinct half-widths per element
     tmp_.assign(plane, 0);
@@ -68,6 +69,9 @@ LitMoments MaskOps::lit_field(BytePlane g, int threshold, BytePlane lit) {
     }
     std::int64_t m00 = 0, m10 = 0, m01 = 0;
     std::uint32_t* ps = padded_sums_.data();
+    const std::int64_t at_least = std::int64_t{kArea} * (threshold + 1) - kArea / 2;
+    const auto limit =
+        static_cast<std::uint32_t>(std::clamp<std::int64_t>(at_least, 0, UINT32_MAX));
     for (int y = 0; y < h; ++y) {
         if (y > 0) {
             const std::uint8_t* add = g.row(reflect101(y + kR, h));
@@ -79,16 +83,19 @@ LitMoments MaskOps::lit_field(BytePlane g, int threshold, BytePlane lit) {
             ps[i] = col[reflect101(i - kR, w)];
             ps[w + kR + i] = col[reflect101(w + i, w)];
         }
-        std::uint32_t s = 0;
-        for (int i = 0; i < 2 * kR + 1; ++i) s += ps[i];
+        // The 9-wide sums (vectorised), then mean > threshold without the division:
+        // (s + 40) / 81 > t  <=>  s >= 81 (t + 1) - 40.
+        std::uint32_t* box = box_.data();
+        for (int x = 0; x < w; ++x)
+            box[x] = ps[x] + ps[x + 1] + ps[x + 2] + ps[x + 3] + ps[x + 4] + ps[x + 5] + ps[x + 6] +
+                     ps[x + 7] + ps[x + 8];
         std::uint8_t* out = lit.row(y);
-        std::int64_t count = 0, xs = 0;
+        std::int32_t count = 0, xs = 0;
         for (int x = 0; x < w; ++x) {
-            const bool on = static_cast<int>((s + kArea / 2) / kArea) > threshold;
-            out[x] = on ? 255 : 0;
+            const std::int32_t on = box[x] >= limit ? 1 : 0;
+            out[x] = static_cast<std::uint8_t>(on * 255);
             count += on;
-            xs += on ? x : 0;
-            if (x + 1 < w) s = s + ps[x + 2 * kR + 1] - ps[x];
+            xs += on * x;
         }
         m00 += count;
         m10 += xs;

@@ -39,7 +39,7 @@ TEST(MaskOps, LitFieldIsBlurThresholdAndMoments) {
         cv::GaussianBlur(gray, gray, cv::Size(0, 0), 3);  // smooth, so the threshold cuts shapes
         MaskOps ops;
         ops.configure(size.width, size.height);
-        for (int t : {12, 100, 127, 128, 200}) {
+        for (int t : {0, 12, 100, 127, 128, 200, 254, 255}) {
             cv::Mat want, got(size, CV_8U);
             cv::blur(gray, want, cv::Size(9, 9));
             cv::threshold(want, want, t, 255, cv::THRESH_BINARY);

@@ -57,7 +57,7 @@ public:
 
 private:
     int width_ = 0, height_ = 0;
-    std::vector<std::uint32_t> columns_, padded_sums_;
+    std::vector<std::uint32_t> columns_, padded_sums_, box_;
     std::vector<std::uint16_t> rows_;  // smooth_at_least's horizontal pass
     std::vector<std::uint8_t> padded_, spans_, tmp_;
     std::vector<std::int32_t> parent_;
