@@ -23,10 +23,8 @@
 //     the six features are measured (GestureFeatures).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
-// allocated in configure(). Speed (docs/gestures.md): the reduction is BlockMean for odd
-// integer factors (cv::resize INTER_AREA otherwise), the mask operations MaskOps (each
-// the bytes of the OpenCV call it stands for), the probability only inside the lit field
-// (the rest cannot reach the mask), the distance transform only in each region's box.
+// allocated in configure(); own code (BlockMean, MaskOps, ContourTracer) gives the bytes
+// of the OpenCV calls it replaces, without their allocations (docs/gestures.md#speed).
 #pragma once
 
 #include <array>
