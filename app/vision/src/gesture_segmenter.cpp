@@ -19,7 +19,7 @@ struct GestureSegmenter::Work {
     cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels, window;
     std::vector<std::uint32_t> dist;  // chamfer distances in one region's box
     std::vector<double> reach;        // per region pixel, its distance from the entry
-    cv::Mat large_element, small_element, open3, fov_element;
+    cv::Mat large_element, small_element, fov_element;
     struct Px {
         int x, y;
     };
@@ -54,7 +54,6 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     w.large_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(big, big));
     const int s = std::max(1, params_.small_element);
     w.small_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(s, s));
-    w.open3 = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
     w.fov_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7));
     for (int r = 0; r < 7; ++r) {  // each row of the ellipse is centred on column 3
         const std::uint8_t* e = w.fov_element.ptr<std::uint8_t>(r);
@@ -62,9 +61,11 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
         while (first < 7 && e[first] == 0) ++first;
         w.fov_rows[r] = first < 7 ? 3 - first : -1;
     }
-    w.pixels.reserve(static_cast<std::size_t>(sw) * sh);
-    w.entries.reserve(static_cast<std::size_t>(sw) * sh / 4);
-    w.regions.reserve(256);
+    // Every list at its largest possible size: no reallocation per frame, whatever the mask.
+    const auto area = static_cast<std::size_t>(sw) * sh;
+    w.pixels.reserve(area);
+    w.entries.reserve(area);
+    w.regions.reserve(static_cast<std::size_t>((sw + 1) / 2) * ((sh + 1) / 2) + 1);
 }
 
 std::size_t GestureSegmenter::segment(const hal::Frame& frame,
