@@ -1,12 +1,16 @@
 // Tool-gesture benchmark (issue 6, docs/performance.md): segmentation + the features
 // + classification for one 1920x1080 frame with two tools (fig. 3.12e-h, rendered by
-// the scene simulator), with the shipped models; median and p99 per frame.
+// the scene simulator), with the shipped models; median and p99 per frame, heap
+// allocations per frame (operator new, and the C allocator, which OpenCV's buffers
+// come from; every thread), CPU time of the whole process (OpenCV's worker threads too).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
 #include <vector>
 
+#include "alloc_counter.hpp"
+#include "c_alloc_counter.hpp"
 #include "endotower/scene/renderer.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
 #include "endotower/vision/gesture_segmenter.hpp"
@@ -49,24 +53,34 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
     std::vector<double> ms;
     ms.reserve(100000);
     std::size_t i = 0, found = 0;
+    std::int64_t allocs = 0, c_allocs = 0;
     for (auto _ : state) {
         hal::Frame f;
         f.format = fmt;
         f.data = frames[i++ % frames.size()].bgr.data();
+        const std::int64_t a0 = bench::allocations(), c0 = bench::c_allocations();
         const auto t0 = std::chrono::steady_clock::now();
         const std::size_t n = segmenter.segment(f, blobs);
         for (std::size_t b = 0; b < n; ++b)
             found += classifier.classify(blobs[b].features).label >= 0;
-        ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count());
+        const auto t1 = std::chrono::steady_clock::now();
+        allocs += bench::allocations() - a0;
+        c_allocs += bench::c_allocations() - c0;
+        ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     }
     std::sort(ms.begin(), ms.end());
     state.counters["median_ms"] = ms[ms.size() / 2];
     state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
-    state.counters["tools_per_frame"] = static_cast<double>(found) / static_cast<double>(ms.size());
+    const double count = static_cast<double>(ms.size());
+    state.counters["allocs_per_frame"] = static_cast<double>(allocs) / count;
+    state.counters["c_allocs_per_frame"] = static_cast<double>(c_allocs) / count;
+    state.counters["tools_per_frame"] = static_cast<double>(found) / count;
 }
-BENCHMARK(BM_Gestures1080pTwoTools)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_Gestures1080pTwoTools)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(3.0)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 
 }  // namespace
 

@@ -3,21 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
-#include <vector>
+#include <span>
 
 namespace endotower::vision {
 
 namespace {
 
-double polygon_perimeter(const std::vector<cv::Point>& p) {
-    return cv::arcLength(p, true);
-}
-
 // Max and min Feret diameters of a convex polygon (counter-clockwise or clockwise):
 // the diameter is the largest vertex distance; the width is the smallest, over the
 // edges, of the largest vertex distance from the edge's line (rotating calipers
 // by brute force: hulls here have tens of vertices).
-void feret(const std::vector<cv::Point>& hull, double& max_d, double& min_d) {
+void feret(std::span<const IntPoint> hull, double& max_d, double& min_d) {
     max_d = 0;
     min_d = 0;
     const std::size_t n = hull.size();
@@ -28,14 +24,21 @@ void feret(const std::vector<cv::Point>& hull, double& max_d, double& min_d) {
     if (n < 3) return;
     min_d = 1e300;
     for (std::size_t i = 0; i < n; ++i) {
-        const cv::Point a = hull[i], b = hull[(i + 1) % n];
+        const IntPoint a = hull[i], b = hull[(i + 1) % n];
         const double ex = b.x - a.x, ey = b.y - a.y, len = std::hypot(ex, ey);
         if (len <= 0) continue;
         double far = 0;
-        for (const cv::Point& p : hull)
+        for (const IntPoint& p : hull)
             far = std::max(far, std::abs(ex * (p.y - a.y) - ey * (p.x - a.x)) / len);
         min_d = std::min(min_d, far);
     }
+}
+
+// std::lround without the library call: half away from zero (v - trunc(v) is exact).
+int round_half_away(double v) {
+    const long t = static_cast<long>(v);
+    const double f = v - static_cast<double>(t);
+    return static_cast<int>(f >= 0.5 ? t + 1 : f <= -0.5 ? t - 1 : t);
 }
 
 // 0<->1 changes along the line through (cx, cy) at `angle`, sampled every pixel
@@ -47,8 +50,7 @@ int changes_along(const std::uint8_t* mask, int w, int h, int stride, double cx,
     int changes = 0;
     bool prev = false;
     for (int s = -reach; s <= reach; ++s) {
-        const int x = static_cast<int>(std::lround(cx + s * dx)),
-                  y = static_cast<int>(std::lround(cy + s * dy));
+        const int x = round_half_away(cx + s * dx), y = round_half_away(cy + s * dy);
         const bool on = x >= 0 && y >= 0 && x < w && y < h &&
                         mask[static_cast<std::size_t>(y) * stride + x] != 0;
         if (on != prev) ++changes;
@@ -69,29 +71,24 @@ std::array<float, GestureFeatures::kExtendedCount> GestureFeatures::as_vector() 
 
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
                                          int stride) {
+    ContourTracer tracer;
+    tracer.reserve(width, height);
+    return measure_gesture_features(mask, width, height, stride, tracer);
+}
+
+GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
+                                         int stride, ContourTracer& tracer) {
     GestureFeatures f;
     if (mask == nullptr || width <= 0 || height <= 0) return f;
-    // findContours wants a writable, zero-bordered copy.
-    cv::Mat m(height + 2, width + 2, CV_8U, cv::Scalar(0));
-    const cv::Mat in(height, width, CV_8U, const_cast<std::uint8_t*>(mask),
-                     static_cast<std::size_t>(stride));
-    cv::Mat inner = m(cv::Rect(1, 1, width, height));
-    cv::compare(in, 0, inner, cv::CMP_NE);
-    std::vector<std::vector<cv::Point>> contours;
-    cv::findContours(m, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-    const std::vector<cv::Point>* best = nullptr;
-    double best_area = 0;
-    for (const auto& c : contours) {
-        const double a = std::abs(cv::contourArea(c));
-        if (c.size() >= 3 && a > best_area) best = &c, best_area = a;
-    }
-    if (best == nullptr || best_area <= 0) return f;
-    const std::vector<cv::Point>& c = *best;
-    const double area = best_area, perimeter = polygon_perimeter(c);
-    std::vector<cv::Point> hull;
-    cv::convexHull(c, hull);
-    const double hull_perimeter = polygon_perimeter(hull),
-                 hull_area = std::abs(cv::contourArea(hull));
+    // The largest outer border, in the coordinates of a copy with a zero border (as
+    // cv::findContours traced it), and its hull.
+    double area = 0;
+    const std::span<const IntPoint> c =
+        tracer.largest(mask, width, height, static_cast<std::size_t>(stride), area);
+    if (c.empty() || area <= 0) return f;
+    const double perimeter = polygon_perimeter(c);
+    const std::span<const IntPoint> hull = tracer.hull(c);
+    const double hull_perimeter = polygon_perimeter(hull), hull_area = polygon_area(hull);
 
     f.compactness = perimeter * perimeter / (4.0 * M_PI * area);
     f.roughness = hull_perimeter > 0 ? perimeter / hull_perimeter : 1.0;
@@ -104,10 +101,22 @@ GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, in
 
     // The scan lines cross at the centroid of all the mask's pixels (open jaws cut
     // off by the window may be apart); Hu moments of the blob's polygon.
-    const cv::Moments all = cv::moments(inner, true);
-    f.centroid_x = all.m10 / all.m00;
-    f.centroid_y = all.m01 / all.m00;
-    const cv::Moments mo = cv::moments(c);
+    double m00 = 0, m10 = 0, m01 = 0;  // integer sums: exact, as cv::moments(mask, true)
+    for (int y = 0; y < height; ++y) {
+        const std::uint8_t* r = mask + static_cast<std::size_t>(y) * stride;
+        long count = 0, xs = 0;
+        for (int x = 0; x < width; ++x)
+            if (r[x] != 0) ++count, xs += x;
+        m00 += static_cast<double>(count);
+        m10 += static_cast<double>(xs);
+        m01 += static_cast<double>(count) * y;
+    }
+    f.centroid_x = m10 / m00;
+    f.centroid_y = m01 / m00;
+    // A header on the points (cv::Point is two ints, as IntPoint): no copy, no allocation.
+    static_assert(sizeof(IntPoint) == sizeof(cv::Point));
+    const cv::Mat points(static_cast<int>(c.size()), 1, CV_32SC2, const_cast<IntPoint*>(c.data()));
+    const cv::Moments mo = cv::moments(points);
     double hu[7];
     cv::HuMoments(mo, hu);
     f.hu1 = hu[0];

@@ -5,12 +5,21 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "endotower/vision/block_mean.hpp"
+#include "endotower/vision/mask_ops.hpp"
+
 namespace endotower::vision {
 
 struct GestureSegmenter::Work {
     double scale = 1.0;
-    cv::Mat small, gray, blurred, lit, a, opened, binary, labels, stats, centroids, dist, window;
-    cv::Mat large_element, small_element, open3, fov_element;
+    BlockMean reduce;  // the odd integer factors (1920 -> 640); others: cv::resize
+    MaskOps ops;
+    ContourTracer tracer;           // the features' contours (window <= the analysis size)
+    std::array<int, 7> fov_rows{};  // the field-of-view element's rows as half-widths
+    cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels, window;
+    std::vector<std::uint32_t> dist;  // chamfer distances in one region's box
+    std::vector<double> reach;        // per region pixel, its distance from the entry
+    cv::Mat large_element, small_element, fov_element;
     struct Px {
         int x, y;
     };
@@ -31,20 +40,32 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     const int sw = std::max(1, static_cast<int>(std::lround(format.width * w.scale)));
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
-    for (cv::Mat* m : {&w.gray, &w.blurred, &w.lit, &w.a, &w.opened, &w.binary, &w.window})
+    w.reduce.configure(format.width, format.height, sw, sh, 3);
+    for (cv::Mat* m :
+         {&w.gray, &w.blurred, &w.lit, &w.eroded, &w.a, &w.opened, &w.binary, &w.window})
         m->create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
-    w.dist.create(sh, sw, CV_32F);
+    w.ops.configure(sw, sh);
+    w.tracer.reserve(sw, sh);
+    w.dist.resize(static_cast<std::size_t>(sw) * sh);
+    w.reach.resize(static_cast<std::size_t>(sw) * sh);
     const int big =
         std::max(3, static_cast<int>(std::lround(params_.large_element_fraction * sw)) | 1);
     w.large_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(big, big));
     const int s = std::max(1, params_.small_element);
     w.small_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(s, s));
-    w.open3 = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
     w.fov_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7));
-    w.pixels.reserve(static_cast<std::size_t>(sw) * sh);
-    w.entries.reserve(static_cast<std::size_t>(sw) * sh / 4);
-    w.regions.reserve(256);
+    for (int r = 0; r < 7; ++r) {  // each row of the ellipse is centred on column 3
+        const std::uint8_t* e = w.fov_element.ptr<std::uint8_t>(r);
+        int first = 0;
+        while (first < 7 && e[first] == 0) ++first;
+        w.fov_rows[r] = first < 7 ? 3 - first : -1;
+    }
+    // Every list at its largest possible size: no reallocation per frame, whatever the mask.
+    const auto area = static_cast<std::size_t>(sw) * sh;
+    w.pixels.reserve(area);
+    w.entries.reserve(area);
+    w.regions.reserve(static_cast<std::size_t>((sw + 1) / 2) * ((sh + 1) / 2) + 1);
 }
 
 std::size_t GestureSegmenter::segment(const hal::Frame& frame,
@@ -56,88 +77,121 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (w.scale < 1.0)
+    if (w.reduce.ready())
+        w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
+    else if (w.scale < 1.0)
         cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
     else
         full.copyTo(w.small);
     const int W = w.small.cols, H = w.small.rows;
 
-    // Luma (and the tool probability) per pixel; brightness histogram for the field of view.
-    std::array<int, 256> hist{};
+    // Grey value per pixel and its histogram (four in turn: runs of one grey value do
+    // not wait on one counter).
+    std::array<std::array<int, 256>, 4> hists{};
     for (int y = 0; y < H; ++y) {
         const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
         std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
-        std::uint8_t* q = w.binary.ptr<std::uint8_t>(y);
-        const bool like = params_.method == GestureSegmentation::kLikelihood;
-        for (int x = 0; x < W; ++x, p += 3) {
+        int x = 0;
+        for (; x + 4 <= W; x += 4, p += 12)
+            for (int j = 0; j < 4; ++j) {
+                const auto v =
+                    static_cast<std::uint8_t>((p[3 * j] + p[3 * j + 1] + p[3 * j + 2]) / 3);
+                g[x + j] = v;
+                ++hists[j][v];
+            }
+        for (; x < W; ++x, p += 3) {
             g[x] = static_cast<std::uint8_t>((p[0] + p[1] + p[2]) / 3);
-            if (like) q[x] = model_->probability(p[0], p[1], p[2]);
-            ++hist[g[x]];
+            ++hists[0][g[x]];
         }
     }
+    std::array<int, 256> hist{};
+    for (int v = 0; v < 256; ++v) hist[v] = hists[0][v] + hists[1][v] + hists[2][v] + hists[3][v];
     // The lit field of view (as LikelihoodToolTracker): brighter than 0.35 x the median
-    // after a 9x9 mean, so a dark shaft inside it stays inside.
+    // after a 9x9 mean, so a dark shaft inside it stays inside; then eroded (7x7 ellipse).
     int median = 0;
     for (int acc = 0; median < 255 && (acc += hist[median]) < W * H / 2;) ++median;
-    cv::blur(w.gray, w.blurred, cv::Size(9, 9));
-    cv::threshold(w.blurred, w.lit, std::max(12.0, 0.35 * median), 255, cv::THRESH_BINARY);
-    const cv::Moments fov = cv::moments(w.lit, true);
+    auto plane = [](cv::Mat& m) {
+        return BytePlane{m.data, m.cols, m.rows, static_cast<std::size_t>(m.step)};
+    };
+    // cv::threshold compares 8-bit pixels with the threshold's floor.
+    const int lit_threshold = static_cast<int>(std::floor(std::max(12.0, 0.35 * median)));
+    const LitMoments fov = w.ops.lit_field(plane(w.gray), lit_threshold, plane(w.lit));
     if (fov.m00 <= 0) return 0;
     const double fcx = fov.m10 / fov.m00, fcy = fov.m01 / fov.m00, fr = std::sqrt(fov.m00 / M_PI);
-    cv::erode(w.lit, w.lit, w.fov_element);
+    w.ops.morph(plane(w.lit), plane(w.eroded), w.fov_rows, true);
 
     if (params_.method == GestureSegmentation::kLikelihood) {
-        cv::GaussianBlur(w.binary, w.binary, cv::Size(5, 5), 1.2);
-        cv::threshold(w.binary, w.binary, params_.threshold - 1, 255, cv::THRESH_BINARY);
-        cv::bitwise_and(w.binary, w.lit, w.binary);
-        cv::morphologyEx(w.binary, w.binary, cv::MORPH_OPEN, w.open3);
+        // The tool probability, only where lit: the 5x5 Gaussian of a pixel inside the
+        // eroded field of view reads only lit pixels (the ellipse covers its 5x5), and
+        // every other pixel is cleared by the AND below, so the mask is the same.
+        const std::uint8_t* table = model_->table().data();
+        for (int y = 0; y < H; ++y) {
+            const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
+            const std::uint8_t* l = w.lit.ptr<std::uint8_t>(y);
+            std::uint8_t* q = w.blurred.ptr<std::uint8_t>(y);
+            for (int x = 0; x < W; ++x, p += 3)
+                q[x] = l[x] ? table[ToolLikelihood::cell(p[0], p[1], p[2])] : 0;
+        }
+        w.ops.smooth_at_least(plane(w.blurred), params_.threshold, plane(w.eroded),
+                              plane(w.binary));
+        w.ops.open3(plane(w.binary), plane(w.binary));
     } else {
         // eq. 3.3: A - (A o B1); eq. 3.5: A + (A o B2); then a high threshold.
         cv::bitwise_not(w.gray, w.a);
-        cv::bitwise_and(w.a, w.lit, w.a);
+        cv::bitwise_and(w.a, w.eroded, w.a);
         cv::morphologyEx(w.a, w.opened, cv::MORPH_OPEN, w.large_element);
         cv::subtract(w.a, w.opened, w.a);
         cv::morphologyEx(w.a, w.opened, cv::MORPH_OPEN, w.small_element);
         cv::add(w.a, w.opened, w.a);
         cv::threshold(w.a, w.binary, params_.high_threshold - 1, 255, cv::THRESH_BINARY);
     }
-    const int n =
-        cv::connectedComponentsWithStats(w.binary, w.labels, w.stats, w.centroids, 8, CV_32S);
+    const int n = w.ops.label(plane(w.binary), w.labels.ptr<std::int32_t>(0));
+    const std::vector<Component>& comps = w.ops.components();
     const double min_area = params_.min_area_fraction * W * H,
                  touch = params_.border_touch_fraction * W;
     w.regions.clear();
     for (int i = 1; i < n; ++i)
-        if (w.stats.at<int>(i, cv::CC_STAT_AREA) >= min_area)
-            w.regions.push_back({i, w.stats.at<int>(i, cv::CC_STAT_AREA)});
-    std::sort(w.regions.begin(), w.regions.end(),
-              [](const Work::Region& a, const Work::Region& b) { return a.area > b.area; });
+        if (comps[i].area >= min_area) w.regions.push_back({i, comps[i].area});
+    // Largest first; equal areas by label (first pixel in raster order).
+    std::sort(w.regions.begin(), w.regions.end(), [](const Work::Region& a, const Work::Region& b) {
+        return a.area != b.area ? a.area > b.area : a.label < b.label;
+    });
     if (w.regions.empty()) return 0;
-    cv::distanceTransform(w.binary, w.dist, cv::DIST_L2, 3);
-    auto rim_distance = [&](int x, int y) {
-        const double r = fr - std::hypot(x - fcx, y - fcy);
-        return std::min<double>({r, x + 1.0, y + 1.0, double(W - x), double(H - y)});
+    // Nearer the rim than `touch` (the field of view's circle or the picture's edge).
+    // The square root only near the circle: well inside it, r >= touch + 1 for sure.
+    const double inner = std::max(0.0, fr - touch - 1.0), inner2 = inner * inner;
+    auto entering = [&](int x, int y) {
+        if (std::min<double>({x + 1.0, y + 1.0, double(W - x), double(H - y)}) < touch) return true;
+        const double dx = x - fcx, dy = y - fcy;
+        if (dx * dx + dy * dy < inner2) return false;
+        return fr - std::hypot(dx, dy) < touch;
     };
-
     std::size_t found = 0;
     for (const Work::Region& reg : w.regions) {
         if (found == out.size()) break;
-        const int bx = w.stats.at<int>(reg.label, cv::CC_STAT_LEFT),
-                  by = w.stats.at<int>(reg.label, cv::CC_STAT_TOP);
-        const int bw = w.stats.at<int>(reg.label, cv::CC_STAT_WIDTH),
-                  bh = w.stats.at<int>(reg.label, cv::CC_STAT_HEIGHT);
+        const Component& c = comps[reg.label];
+        const int bx = c.left, by = c.top, bw = c.right - c.left + 1, bh = c.bottom - c.top + 1;
+        // The distance transform in the box and one pixel around (the whole region's
+        // nearest zeros lie there: exactly cv::distanceTransform's values).
+        const int dx0 = std::max(0, bx - 1), dy0 = std::max(0, by - 1);
+        const int dx1 = std::min(W, bx + bw + 1), dy1 = std::min(H, by + bh + 1);
+        w.ops.chamfer(plane(w.binary), dx0, dy0, dx1, dy1, w.dist.data());
         w.pixels.clear();
         w.entries.clear();
-        float radius = 0;
+        std::uint32_t radius_fixed = 0;
         for (int y = by; y < by + bh; ++y) {
             const int* l = w.labels.ptr<int>(y);
-            const float* d = w.dist.ptr<float>(y);
+            const std::uint32_t* d =
+                w.dist.data() + static_cast<std::size_t>(y - dy0) * (dx1 - dx0) - dx0;
             for (int x = bx; x < bx + bw; ++x) {
                 if (l[x] != reg.label) continue;
                 w.pixels.push_back({x, y});
-                if (rim_distance(x, y) < touch)
-                    w.entries.push_back({x, y}), radius = std::max(radius, d[x]);
+                if (entering(x, y))
+                    w.entries.push_back({x, y}), radius_fixed = std::max(radius_fixed, d[x]);
             }
         }
+        // As cv::distanceTransform: float(distance) x 2^-16.
+        float radius = static_cast<float>(radius_fixed) * (1.0f / 65536.0f);
         if (w.entries.empty()) continue;  // not entering from outside: not a tool
         {  // A tool is a shaft: long for its width (second moments of the region).
             double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
@@ -175,13 +229,29 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
             const double da = std::hypot(p.x - ax, p.y - ay);
             return nb > 0 ? std::min(da, std::hypot(p.x - bx2, p.y - by2)) : da;
         };
+        // sqrt(dx^2 + dy^2) is within a few ulp of hypot: hypot only where that could
+        // change the farthest reach or the 97 % cut.
+        auto approx = [&](const Work::Px& p) {
+            const double dx = p.x - ax, dy = p.y - ay, ex = p.x - bx2, ey = p.y - by2;
+            const double q = dx * dx + dy * dy;
+            return std::sqrt(nb > 0 ? std::min(q, ex * ex + ey * ey) : q);
+        };
+        constexpr double kSlack = 1e-12;
+        double far_approx = -1;
+        for (std::size_t i = 0; i < w.pixels.size(); ++i)
+            far_approx = std::max(far_approx, w.reach[i] = approx(w.pixels[i]));
         double far = -1;
-        for (const auto& p : w.pixels) far = std::max(far, reach(p));
+        for (std::size_t i = 0; i < w.pixels.size(); ++i)
+            if (w.reach[i] >= far_approx * (1 - kSlack)) far = std::max(far, reach(w.pixels[i]));
         // The tip: mean of the pixels within 3 % of the farthest reach.
+        const double cut = 0.97 * far;
         double tx = 0, ty = 0;
         int nt = 0;
-        for (const auto& p : w.pixels)
-            if (reach(p) >= 0.97 * far) tx += p.x, ty += p.y, ++nt;
+        for (std::size_t i = 0; i < w.pixels.size(); ++i) {
+            const double r = w.reach[i];
+            if (r > cut * (1 + kSlack) || (r >= cut * (1 - kSlack) && reach(w.pixels[i]) >= cut))
+                tx += w.pixels[i].x, ty += w.pixels[i].y, ++nt;
+        }
         tx /= nt, ty /= nt;
         if (radius < 1.0f) radius = 1.0f;
         const double R = params_.window_radii * radius;
@@ -191,13 +261,17 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
                   y1 = std::min(H, static_cast<int>(ty + R) + 2);
         cv::Mat win = w.window(cv::Rect(x0, y0, x1 - x0, y1 - y0));
         win.setTo(0);
-        for (const auto& p : w.pixels)
-            if (p.x >= x0 && p.x < x1 && p.y >= y0 && p.y < y1 &&
-                std::hypot(p.x - tx, p.y - ty) <= R)
+        // hypot(dx, dy) <= R, the square root only where dx^2 + dy^2 is within 1e-9 of R^2.
+        const double r2_in = R * R * (1 - 1e-9), r2_out = R * R * (1 + 1e-9);
+        for (const auto& p : w.pixels) {
+            if (p.x < x0 || p.x >= x1 || p.y < y0 || p.y >= y1) continue;
+            const double dx = p.x - tx, dy = p.y - ty, q = dx * dx + dy * dy;
+            if (q <= r2_in || (q < r2_out && std::hypot(dx, dy) <= R))
                 win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
+        }
         GestureBlob& b = out[found];
-        b.features =
-            measure_gesture_features(win.data, win.cols, win.rows, static_cast<int>(win.step));
+        b.features = measure_gesture_features(win.data, win.cols, win.rows,
+                                              static_cast<int>(win.step), w.tracer);
         if (!b.features.valid) continue;
         b.tip = {tx / w.scale, ty / w.scale};
         b.radius_px = radius / w.scale;
@@ -205,6 +279,14 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         ++found;
     }
     return found;
+}
+
+std::span<const std::uint8_t> GestureSegmenter::mask() const {
+    const cv::Mat& m = work_->binary;
+    return {m.data, m.total()};
+}
+int GestureSegmenter::mask_width() const {
+    return work_->binary.cols;
 }
 
 }  // namespace endotower::vision

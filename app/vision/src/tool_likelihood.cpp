@@ -23,20 +23,13 @@ std::uint64_t fnv1a(const std::uint8_t* p, std::size_t n) {
 
 }  // namespace
 
-int ToolLikelihood::cell(std::uint8_t b, std::uint8_t g, std::uint8_t r) {
-    const int s = b + g + r;
-    if (s == 0) return 0;
-    const int cb = (b * (kChroma - 1) + s / 2) / s, cg = (g * (kChroma - 1) + s / 2) / s;
-    const int lv = std::min(kLevels - 1, s * kLevels / 766);
-    return (cb * kChroma + cg) * kLevels + lv;
-}
-
 void ToolLikelihood::add(const hal::Frame& f, const std::uint8_t* labels, double weight,
                          const std::array<double, 3>& gains) {
     if (f.format.pixel_format != hal::PixelFormat::kBgr24) return;
     std::array<std::array<std::uint8_t, 256>, 3> lut;
     for (int c = 0; c < 3; ++c)
-        for (int v = 0; v < 256; ++v) lut[c][v] = static_cast<std::uint8_t>(std::min(255L, std::lround(v * gains[c])));
+        for (int v = 0; v < 256; ++v)
+            lut[c][v] = static_cast<std::uint8_t>(std::min(255L, std::lround(v * gains[c])));
     for (int y = 0; y < f.format.height; ++y) {
         const std::uint8_t* p = f.data + static_cast<std::size_t>(y) * f.format.stride;
         const std::uint8_t* l = labels + static_cast<std::size_t>(y) * f.format.width;
@@ -53,13 +46,15 @@ bool ToolLikelihood::finish(std::string& error) {
     double nt = 0, nb = 0;
     for (int i = 0; i < kCells; ++i) nt += tool_[i], nb += background_[i];
     if (nt <= 0 || nb <= 0) {
-        error = nt <= 0 ? "no tool pixels in the training data" : "no background pixels in the training data";
+        error = nt <= 0 ? "no tool pixels in the training data"
+                        : "no background pixels in the training data";
         return false;
     }
     // 3x3x3 box over (cb, cg, level), then P(tool) with equal priors; a small
     // pseudo-count keeps cells nobody saw at 0.5 x (their neighbours' evidence).
     auto at = [](const std::array<double, kCells>& a, int cb, int cg, int lv) {
-        if (cb < 0 || cg < 0 || lv < 0 || cb >= kChroma || cg >= kChroma || lv >= kLevels) return 0.0;
+        if (cb < 0 || cg < 0 || lv < 0 || cb >= kChroma || cg >= kChroma || lv >= kLevels)
+            return 0.0;
         return a[(cb * kChroma + cg) * kLevels + lv];
     };
     const double prior = 1e-7;
@@ -85,7 +80,8 @@ std::string ToolLikelihood::serialise() const {
     std::string s(kMagic, kMagicLen);
     s.append(reinterpret_cast<const char*>(table_.data()), table_.size());
     char hash[20];
-    std::snprintf(hash, sizeof hash, "%016llx\n", static_cast<unsigned long long>(fnv1a(table_.data(), table_.size())));
+    std::snprintf(hash, sizeof hash, "%016llx\n",
+                  static_cast<unsigned long long>(fnv1a(table_.data(), table_.size())));
     return s + hash;
 }
 
@@ -96,13 +92,15 @@ bool ToolLikelihood::parse(const std::string& bytes, const std::string& name, st
         return false;
     }
     if (bytes.size() != want) {
-        error = name + ": " + std::to_string(bytes.size()) + " bytes, a tool likelihood model has " +
-                std::to_string(want) + " (truncated or not this version)";
+        error = name + ": " + std::to_string(bytes.size()) +
+                " bytes, a tool likelihood model has " + std::to_string(want) +
+                " (truncated or not this version)";
         return false;
     }
     const auto* table = reinterpret_cast<const std::uint8_t*>(bytes.data() + kMagicLen);
     char hash[20];
-    std::snprintf(hash, sizeof hash, "%016llx\n", static_cast<unsigned long long>(fnv1a(table, kCells)));
+    std::snprintf(hash, sizeof hash, "%016llx\n",
+                  static_cast<unsigned long long>(fnv1a(table, kCells)));
     if (bytes.compare(kMagicLen + kCells, 17, hash) != 0) {
         error = name + ": checksum mismatch (the file is corrupt)";
         return false;

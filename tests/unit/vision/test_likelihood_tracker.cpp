@@ -2,6 +2,7 @@
 // the model file's checks, and tools found on synthetic frames with exact truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -29,6 +30,24 @@ TEST(ToolLikelihood, CellQuantisesChromaticityAndBrightness) {
     EXPECT_EQ(ToolLikelihood::cell(128, 128, 128), (21 * 64 + 21) * 16 + 8);
     // Pure red: b = g = 0, level 4 (200 * 16 / 766).
     EXPECT_EQ(ToolLikelihood::cell(0, 0, 200), 4);
+}
+
+TEST(ToolLikelihood, CellEqualsTheDivisionsForEveryColour) {
+    // cell() divides by b + g + r through reciprocals; the reference divides.
+    long mismatches = 0;
+    int first = -1;
+    for (int c = 0; c < (1 << 24); ++c) {
+        const int b = c & 255, g = (c >> 8) & 255, r = c >> 16, s = b + g + r;
+        int want = 0;
+        if (s > 0)
+            want = (((b * 63 + s / 2) / s) * 64 + (g * 63 + s / 2) / s) * 16 +
+                   std::min(15, s * 16 / 766);
+        const int got =
+            ToolLikelihood::cell(static_cast<std::uint8_t>(b), static_cast<std::uint8_t>(g),
+                                 static_cast<std::uint8_t>(r));
+        if (got != want && mismatches++ == 0) first = c;
+    }
+    EXPECT_EQ(mismatches, 0) << "first at colour 0x" << std::hex << first;
 }
 
 // Grey tool pixels left, red tissue right.

@@ -3,7 +3,8 @@
 //
 // Input: an 8-bit mask (nonzero = blob), width x height, `stride` bytes per row,
 // borrowed for the call. The blob is the largest outer contour of the mask
-// (OpenCV's border following: a polygon through the boundary pixels' centres).
+// (OpenCV's border following, ContourTracer: a polygon through the boundary pixels'
+// centres).
 // Outputs, with P = that polygon's perimeter, A = its area, H = its convex hull:
 //   compactness        P^2 / (4 pi A): 1 for a disc, larger when convoluted;
 //   roughness          P / perimeter(H): 1 for a convex blob;
@@ -23,6 +24,8 @@
 
 #include <array>
 #include <cstdint>
+
+#include "endotower/vision/outer_contour.hpp"
 
 namespace endotower::vision {
 
@@ -46,5 +49,8 @@ struct GestureFeatures {
 
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
                                          int stride);
+// The same with the caller's tracer (reserve()d for the mask's size): no allocation.
+GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
+                                         int stride, ContourTracer& tracer);
 
 }  // namespace endotower::vision

@@ -23,7 +23,8 @@
 //     the six features are measured (GestureFeatures).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
-// allocated in configure().
+// allocated in configure(); own code (BlockMean, MaskOps, ContourTracer) gives the bytes
+// of the OpenCV calls it replaces, without their allocations (docs/gestures.md#speed).
 #pragma once
 
 #include <array>
@@ -68,6 +69,10 @@ public:
     const GestureSegmenterParams& params() const { return params_; }
     void configure(const hal::FrameFormat& format);
     std::size_t segment(const hal::Frame& frame, std::span<GestureBlob, kMaxBlobs> out);
+    // The last segment()'s tool mask at the analysis size (before the region filter):
+    // row-major, mask_width() bytes a row, 0 or 255; empty before configure().
+    std::span<const std::uint8_t> mask() const;
+    int mask_width() const;
 
 private:
     struct Work;

@@ -1,0 +1,35 @@
+// BlockMean: reduces an 8-bit image of `channels` interleaved channels by an odd
+// integer factor k in both directions, each output pixel the mean of its k x k input
+// block rounded to the nearest integer: (sum + k^2 / 2) / k^2. These are the bytes
+// cv::resize gives with INTER_AREA at that factor (its integer-factor path rounds
+// sum / k^2 to nearest, and k^2 odd leaves no ties; tested), in one pass over the input
+// with one row of column sums and no threads.
+//
+// configure() sizes the buffers (the only allocation) and returns false when the
+// sizes are not an odd integer factor apart (k = 1, a copy, included); run() then does
+// nothing. run() reads `src` (rows of `src_stride` bytes) and writes `dst` (rows of
+// `dst_stride` bytes); no exceptions, no allocation.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace endotower::vision {
+
+class BlockMean {
+public:
+    bool configure(int src_width, int src_height, int dst_width, int dst_height, int channels);
+    bool ready() const { return factor_ > 0; }
+    int factor() const { return factor_; }
+    void run(const std::uint8_t* src, std::size_t src_stride, std::uint8_t* dst,
+             std::size_t dst_stride);
+
+private:
+    int factor_ = 0, channels_ = 0, dst_width_ = 0, dst_height_ = 0;
+    std::vector<std::uint16_t> columns_;  // one output row's k-row column sums
+    std::vector<std::uint16_t> sums_;     // k = 3: their three-pixel sums
+    std::vector<std::uint8_t> mean_;      // block sum -> rounded mean
+};
+
+}  // namespace endotower::vision

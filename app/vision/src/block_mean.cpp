@@ -1,0 +1,87 @@
+// BlockMean: an odd integer-factor box reduction (block_mean.hpp).
+#include "endotower/vision/block_mean.hpp"
+
+namespace endotower::vision {
+
+bool BlockMean::configure(int src_width, int src_height, int dst_width, int dst_height,
+                          int channels) {
+    factor_ = 0;
+    if (dst_width <= 0 || dst_height <= 0 || channels <= 0 || src_width % dst_width != 0)
+        return false;
+    const int k = src_width / dst_width;
+    // Column sums of k rows (255 k) stay in 16 bits; k <= 15 keeps the mean table small.
+    if (k % 2 == 0 || k > 15 || src_height != k * dst_height) return false;
+    factor_ = k;
+    channels_ = channels;
+    dst_width_ = dst_width;
+    dst_height_ = dst_height;
+    columns_.assign(static_cast<std::size_t>(src_width) * channels, 0);
+    sums_.assign(columns_.size(), 0);
+    const int area = k * k;
+    mean_.resize(static_cast<std::size_t>(255) * area + 1);
+    for (std::size_t s = 0; s < mean_.size(); ++s)
+        mean_[s] = static_cast<std::uint8_t>((s + area / 2) / area);
+    return true;
+}
+
+namespace {
+
+// (s + 4) / 9 as a multiplication: exact for every 3 x 3 sum of bytes.
+constexpr unsigned mean9(unsigned s) {
+    return ((s + 4) * 7282u) >> 16;
+}
+constexpr bool mean9_exact() {
+    for (unsigned s = 0; s <= 9 * 255; ++s)
+        if (mean9(s) != (s + 4) / 9) return false;
+    return true;
+}
+static_assert(mean9_exact());
+
+// One output row for k = 3, three channels: the sums of three neighbouring pixels'
+// column sums for every position (vectorised), then every third pixel's.
+void row_means_3x3(const std::uint16_t* columns, int width, std::uint16_t* sums,
+                   std::uint8_t* out) {
+    const int n = width * 9 - 6;
+    for (int i = 0; i < n; ++i)
+        sums[i] = static_cast<std::uint16_t>(columns[i] + columns[i + 3] + columns[i + 6]);
+    for (int x = 0; x < width; ++x, sums += 9, out += 3) {
+        out[0] = static_cast<std::uint8_t>(mean9(sums[0]));
+        out[1] = static_cast<std::uint8_t>(mean9(sums[1]));
+        out[2] = static_cast<std::uint8_t>(mean9(sums[2]));
+    }
+}
+
+void row_means_any(const std::uint16_t* columns, int width, int k, int channels,
+                   const std::uint8_t* mean, std::uint8_t* out) {
+    for (int x = 0; x < width; ++x, columns += k * channels, out += channels)
+        for (int c = 0; c < channels; ++c) {
+            unsigned s = 0;
+            for (int t = 0; t < k; ++t) s += columns[t * channels + c];
+            out[c] = mean[s];
+        }
+}
+
+}  // namespace
+
+void BlockMean::run(const std::uint8_t* src, std::size_t src_stride, std::uint8_t* dst,
+                    std::size_t dst_stride) {
+    if (factor_ == 0) return;
+    const int k = factor_;
+    const std::size_t n = columns_.size();
+    std::uint16_t* col = columns_.data();
+    for (int y = 0; y < dst_height_; ++y, dst += dst_stride) {
+        const std::uint8_t* row = src + static_cast<std::size_t>(y) * k * src_stride;
+        for (std::size_t i = 0; i < n; ++i) col[i] = row[i];
+        for (int j = 1; j < k; ++j) {
+            row += src_stride;
+            for (std::size_t i = 0; i < n; ++i)
+                col[i] = static_cast<std::uint16_t>(col[i] + row[i]);
+        }
+        if (k == 3 && channels_ == 3)
+            row_means_3x3(col, dst_width_, sums_.data(), dst);
+        else
+            row_means_any(col, dst_width_, k, channels_, mean_.data(), dst);
+    }
+}
+
+}  // namespace endotower::vision

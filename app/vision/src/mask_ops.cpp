@@ -1,0 +1,262 @@
+// MaskOps: allocation-free binary-image operations equal to OpenCV's (mask_ops.hpp).
+#include "endotower/vision/mask_ops.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cstring>
+
+namespace endotower::vision {
+
+namespace {
+
+// cv::borderInterpolate with BORDER_REFLECT_101.
+int reflect101(int p, int n) {
+    if (n == 1) return 0;
+    while (p < 0 || p >= n) p = p < 0 ? -p : 2 * (n - 1) - p;
+    return p;
+}
+
+template <bool kErode>
+void combine(std::uint8_t* o, const std::uint8_t* s, int w) {
+    for (int x = 0; x < w; ++x) o[x] = kErode ? std::min(o[x], s[x]) : std::max(o[x], s[x]);
+}
+
+// The first nonzero byte of r[x..w), or w.
+int next_set(const std::uint8_t* r, int x, int w) {
+    for (; x + 8 <= w; x += 8) {
+        std::uint64_t word;
+        std::memcpy(&word, r + x, 8);
+        if (word != 0) break;
+    }
+    while (x < w && r[x] == 0) ++x;
+    return x;
+}
+
+// cv::distanceTransform's 3x3 L2 weights, CV_FLT_TO_FIX(0.955f / 1.3693f, 16).
+constexpr std::uint32_t kHv = 62587, kDiag = 89738, kFar = INT_MAX >> 2;
+
+}  // namespace
+
+void MaskOps::configure(int width, int height) {
+    width_ = std::max(1, width);
+    height_ = std::max(1, height);
+    const auto plane = static_cast<std::size_t>(width_) * height_;
+    columns_.assign(width_, 0);
+    padded_sums_.assign(width_ + 8, 0);
+    box_.assign(width_, 0);
+    padded_.assign(width_ + 16, 0);
+    spans_.assign(plane * 4, 0);  // up to four distinct half-widths per element
+    tmp_.assign(plane, 0);
+    rows_.assign(plane, 0);
+    // New provisional labels go to pixels none of whose earlier 8-neighbours is set:
+    // no two are 8-adjacent, so at most ceil(w / 2) x ceil(h / 2) of them.
+    const std::size_t labels =
+        static_cast<std::size_t>((width_ + 1) / 2) * static_cast<std::size_t>((height_ + 1) / 2) +
+        1;
+    parent_.assign(labels, 0);
+    components_.reserve(labels);
+    chamfer_.assign(static_cast<std::size_t>(width_ + 2) * (height_ + 2), 0);
+}
+
+LitMoments MaskOps::lit_field(BytePlane g, int threshold, BytePlane lit) {
+    constexpr int kR = 4, kArea = (2 * kR + 1) * (2 * kR + 1);
+    const int w = g.width, h = g.height;
+    std::uint32_t* col = columns_.data();
+    std::fill(col, col + w, 0u);
+    for (int dy = -kR; dy <= kR; ++dy) {
+        const std::uint8_t* r = g.row(reflect101(dy, h));
+        for (int x = 0; x < w; ++x) col[x] += r[x];
+    }
+    std::int64_t m00 = 0, m10 = 0, m01 = 0;
+    std::uint32_t* ps = padded_sums_.data();
+    const std::int64_t at_least = std::int64_t{kArea} * (threshold + 1) - kArea / 2;
+    const auto limit =
+        static_cast<std::uint32_t>(std::clamp<std::int64_t>(at_least, 0, UINT32_MAX));
+    for (int y = 0; y < h; ++y) {
+        if (y > 0) {
+            const std::uint8_t* add = g.row(reflect101(y + kR, h));
+            const std::uint8_t* sub = g.row(reflect101(y - 1 - kR, h));
+            for (int x = 0; x < w; ++x) col[x] = col[x] + add[x] - sub[x];
+        }
+        std::memcpy(ps + kR, col, sizeof(std::uint32_t) * w);
+        for (int i = 0; i < kR; ++i) {
+            ps[i] = col[reflect101(i - kR, w)];
+            ps[w + kR + i] = col[reflect101(w + i, w)];
+        }
+        // The 9-wide sums (vectorised), then mean > threshold without the division:
+        // (s + 40) / 81 > t  <=>  s >= 81 (t + 1) - 40.
+        std::uint32_t* box = box_.data();
+        for (int x = 0; x < w; ++x)
+            box[x] = ps[x] + ps[x + 1] + ps[x + 2] + ps[x + 3] + ps[x + 4] + ps[x + 5] + ps[x + 6] +
+                     ps[x + 7] + ps[x + 8];
+        std::uint8_t* out = lit.row(y);
+        std::int32_t count = 0, xs = 0;
+        for (int x = 0; x < w; ++x) {
+            const std::int32_t on = box[x] >= limit ? 1 : 0;
+            out[x] = static_cast<std::uint8_t>(on * 255);
+            count += on;
+            xs += on * x;
+        }
+        m00 += count;
+        m10 += xs;
+        m01 += count * y;
+    }
+    return {static_cast<double>(m00), static_cast<double>(m10), static_cast<double>(m01)};
+}
+
+void MaskOps::morph(BytePlane in, BytePlane out, std::span<const int> half_widths, bool erode) {
+    const int w = in.width, h = in.height, c = static_cast<int>(half_widths.size()) / 2;
+    const std::uint8_t pad = erode ? 255 : 0;
+    const auto plane = static_cast<std::size_t>(w) * h;
+    // One plane of horizontal min (max) per distinct half-width.
+    int widths[4], planes = 0;
+    for (int hw : half_widths)
+        if (hw >= 0 && std::find(widths, widths + planes, hw) == widths + planes && planes < 4)
+            widths[planes++] = hw;
+    std::uint8_t* row_pad = padded_.data();
+    for (int k = 0; k < planes; ++k) {
+        const int hw = std::min(widths[k], 7);  // padded_ has 8 bytes a side
+        for (int y = 0; y < h; ++y) {
+            std::memset(row_pad, pad, hw);
+            std::memcpy(row_pad + hw, in.row(y), w);
+            std::memset(row_pad + hw + w, pad, hw);
+            std::uint8_t* o = spans_.data() + k * plane + static_cast<std::size_t>(y) * w;
+            std::memcpy(o, row_pad, w);
+            for (int d = 1; d <= 2 * hw; ++d)
+                erode ? combine<true>(o, row_pad + d, w) : combine<false>(o, row_pad + d, w);
+        }
+    }
+    for (int y = 0; y < h; ++y) {
+        std::uint8_t* o = out.row(y);
+        std::memset(o, pad, w);
+        for (int dy = -c; dy <= c; ++dy) {
+            const int hw = half_widths[dy + c], yy = y + dy;
+            if (hw < 0 || yy < 0 || yy >= h) continue;  // outside the image: ignored
+            const int k = static_cast<int>(std::find(widths, widths + planes, hw) - widths);
+            if (k == planes) continue;
+            const std::uint8_t* s = spans_.data() + k * plane + static_cast<std::size_t>(yy) * w;
+            erode ? combine<true>(o, s, w) : combine<false>(o, s, w);
+        }
+    }
+}
+
+void MaskOps::open3(BytePlane in, BytePlane out) {
+    static constexpr int kSquare[3] = {1, 1, 1};
+    const BytePlane tmp{tmp_.data(), in.width, in.height, static_cast<std::size_t>(in.width)};
+    morph(in, tmp, kSquare, true);
+    morph(tmp, out, kSquare, false);
+}
+
+void MaskOps::smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out) {
+    // Q8.8 taps; the row pass stays in 16 bits (255 x 256), the column pass in 32.
+    constexpr std::uint32_t k0 = 22, k1 = 62, k2 = 88;
+    const int w = in.width, h = in.height;
+    std::uint8_t* p = padded_.data();
+    for (int y = 0; y < h; ++y) {
+        const std::uint8_t* r = in.row(y);
+        std::memcpy(p + 2, r, w);
+        p[0] = r[reflect101(-2, w)], p[1] = r[reflect101(-1, w)];
+        p[w + 2] = r[reflect101(w, w)], p[w + 3] = r[reflect101(w + 1, w)];
+        std::uint16_t* o = rows_.data() + static_cast<std::size_t>(y) * w;
+        for (int x = 0; x < w; ++x)
+            o[x] = static_cast<std::uint16_t>(k0 * (p[x] + p[x + 4]) + k1 * (p[x + 1] + p[x + 3]) +
+                                              k2 * p[x + 2]);
+    }
+    // (sum + 2^15) >> 16 >= threshold  <=>  sum >= threshold 2^16 - 2^15.
+    const std::int64_t at_least = std::int64_t{threshold} * 65536 - 32768;
+    const std::uint32_t limit =
+        at_least <= 0 ? 0u
+                      : static_cast<std::uint32_t>(std::min<std::int64_t>(at_least, UINT32_MAX));
+    for (int y = 0; y < h; ++y) {
+        const std::uint16_t* a = rows_.data() + static_cast<std::size_t>(reflect101(y - 2, h)) * w;
+        const std::uint16_t* b = rows_.data() + static_cast<std::size_t>(reflect101(y - 1, h)) * w;
+        const std::uint16_t* c = rows_.data() + static_cast<std::size_t>(y) * w;
+        const std::uint16_t* d = rows_.data() + static_cast<std::size_t>(reflect101(y + 1, h)) * w;
+        const std::uint16_t* e = rows_.data() + static_cast<std::size_t>(reflect101(y + 2, h)) * w;
+        const std::uint8_t* m = and_mask.row(y);
+        std::uint8_t* o = out.row(y);
+        for (int x = 0; x < w; ++x) {
+            const std::uint32_t v = k0 * (a[x] + e[x]) + k1 * (b[x] + d[x]) + k2 * c[x];
+            o[x] = static_cast<std::uint8_t>((v >= limit ? 255 : 0) & (m[x] != 0 ? 255 : 0));
+        }
+    }
+}
+
+int MaskOps::label(BytePlane m, std::int32_t* labels) {
+    const int w = m.width, h = m.height;
+    std::int32_t* parent = parent_.data();
+    auto root = [parent](std::int32_t a) {
+        while (parent[a] != a) a = parent[a] = parent[parent[a]];
+        return a;
+    };
+    std::int32_t next = 1;
+    for (int y = 0; y < h; ++y) {
+        const std::uint8_t* r = m.row(y);
+        std::int32_t* l = labels + static_cast<std::size_t>(y) * w;
+        const std::int32_t* up = y > 0 ? l - w : nullptr;
+        std::memset(l, 0, sizeof(std::int32_t) * w);
+        for (int x = next_set(r, 0, w); x < w; x = next_set(r, x + 1, w)) {
+            std::int32_t lab = 0;
+            const std::int32_t around[4] = {x > 0 ? l[x - 1] : 0, up && x > 0 ? up[x - 1] : 0,
+                                            up ? up[x] : 0, up && x + 1 < w ? up[x + 1] : 0};
+            for (std::int32_t n : around) {
+                if (n == 0) continue;
+                if (lab == 0) {
+                    lab = root(n);
+                    continue;
+                }
+                const std::int32_t a = root(lab), b = root(n);
+                lab = std::min(a, b);
+                parent[std::max(a, b)] = lab;
+            }
+            if (lab == 0) {
+                lab = next++;
+                parent[lab] = lab;
+            }
+            l[x] = lab;
+        }
+    }
+    // Final labels in the order of the provisional ones (= first pixels, raster order):
+    // a set's smallest provisional label is its root.
+    std::int32_t n = 1;
+    for (std::int32_t i = 1; i < next; ++i) parent[i] = parent[i] == i ? n++ : parent[parent[i]];
+    components_.assign(static_cast<std::size_t>(n), Component{w, h, -1, -1, 0});
+    for (int y = 0; y < h; ++y) {
+        const std::uint8_t* r = m.row(y);
+        std::int32_t* l = labels + static_cast<std::size_t>(y) * w;
+        for (int x = next_set(r, 0, w); x < w; x = next_set(r, x + 1, w)) {
+            Component& c = components_[l[x] = parent[l[x]]];
+            ++c.area;
+            c.left = std::min(c.left, x), c.right = std::max(c.right, x);
+            c.top = std::min(c.top, y), c.bottom = std::max(c.bottom, y);
+        }
+    }
+    return n;
+}
+
+void MaskOps::chamfer(BytePlane m, int x0, int y0, int x1, int y1, std::uint32_t* out) {
+    const int ww = x1 - x0, wh = y1 - y0, s = ww + 2;
+    std::uint32_t* t = chamfer_.data();
+    std::fill(t, t + static_cast<std::size_t>(s) * (wh + 2), kFar);
+    for (int y = 0; y < wh; ++y) {
+        const std::uint8_t* r = m.row(y0 + y) + x0;
+        std::uint32_t* c = t + static_cast<std::size_t>(y + 1) * s + 1;
+        for (int x = 0; x < ww; ++x)
+            c[x] = r[x] == 0 ? 0
+                             : std::min({c[x - s - 1] + kDiag, c[x - s] + kHv, c[x - s + 1] + kDiag,
+                                         c[x - 1] + kHv});
+    }
+    for (int y = wh - 1; y >= 0; --y) {
+        std::uint32_t* c = t + static_cast<std::size_t>(y + 1) * s + 1;
+        std::uint32_t* o = out + static_cast<std::size_t>(y) * ww;
+        for (int x = ww - 1; x >= 0; --x) {
+            std::uint32_t d = c[x];
+            if (d > kHv)
+                c[x] = d = std::min({d, c[x + s + 1] + kDiag, c[x + s] + kHv, c[x + s - 1] + kDiag,
+                                     c[x + 1] + kHv});
+            o[x] = d;
+        }
+    }
+}
+
+}  // namespace endotower::vision

@@ -1,0 +1,188 @@
+// The gesture segmenter's output on rendered simulator frames equals, bit for bit, what
+// the OpenCV-based implementation before the speed work (commit d6a5f18) gave: the tool
+// mask (FNV-1a of its bytes), every blob's tip, shaft radius, rim entries and all nine
+// features. Frames: fig. 3.12e-h, 3.22 and 3.23 at 1920x1080 (the odd-factor reduction)
+// and fig. 3.23 at 1280x720 (cv::resize), likelihood segmentation with the shipped
+// model; one suite with the book's morphology.
+// ENDOTOWER_GOLDEN_DUMP=1 prints the table below from the current code instead.
+// Also: segmentation + features + classification allocate nothing per frame (operator
+// new and the C allocator counted, heap_counter.cpp; not under the sanitizers).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "endotower/scene/renderer.hpp"
+#include "endotower/vision/gesture_classifier.hpp"
+#include "endotower/vision/gesture_segmenter.hpp"
+#include "gesture_golden_table.hpp"
+
+using namespace endotower;
+using namespace endotower::vision;
+
+namespace endotower::vision::test {  // heap_counter.cpp
+long heap_allocations();
+long c_allocations();
+void set_counting(bool on);
+}  // namespace endotower::vision::test
+
+namespace {
+
+std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (std::uint8_t b : bytes) h = (h ^ b) * 1099511628211ull;
+    return h;
+}
+
+struct Suite {
+    const char* scenario;
+    int width, height, first, step, count;
+    GestureSegmentation method;
+};
+constexpr Suite kSuites[] = {
+    {"fig312_nonoverlapping", 1920, 1080, 0, 4, 4, GestureSegmentation::kLikelihood},
+    {"fig322_grasper_orientations", 1920, 1080, 0, 8, 4, GestureSegmentation::kLikelihood},
+    {"fig322_scissors_orientations", 1920, 1080, 1, 8, 4, GestureSegmentation::kLikelihood},
+    {"fig323_double_gestures", 1920, 1080, 0, 6, 7, GestureSegmentation::kLikelihood},
+    {"fig323_double_gestures", 1280, 720, 1, 12, 4, GestureSegmentation::kLikelihood},
+    {"fig312_nonoverlapping", 1920, 1080, 2, 8, 2, GestureSegmentation::kMorphology},
+};
+
+}  // namespace
+
+TEST(GestureSegmenterGolden, SameMaskTipsAndFeaturesAsTheOpenCvImplementation) {
+    const std::string root = ENDOTOWER_SOURCE_DIR;
+    std::string error;
+    ToolLikelihood model;
+    ASSERT_TRUE(model.load(root + "/board/sim/models/tool_likelihood.bin", error)) << error;
+    const bool dump = std::getenv("ENDOTOWER_GOLDEN_DUMP") != nullptr;
+    std::size_t row = 0;
+    for (const Suite& s : kSuites) {
+        scene::Scenario scenario;
+        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + s.scenario + ".yaml",
+                                         scenario, error))
+            << error;
+        scenario.width = s.width;
+        scenario.height = s.height;
+        scene::SceneRenderer renderer;
+        ASSERT_TRUE(renderer.init(scenario, 77, error)) << error;
+        GestureSegmenterParams p;
+        p.method = s.method;
+        GestureSegmenter segmenter(&model, p);
+        const hal::FrameFormat fmt{s.width, s.height, s.width * 3, hal::PixelFormat::kBgr24};
+        segmenter.configure(fmt);
+        scene::Image image;
+        scene::FrameTruth truth;
+        for (int k = 0; k < s.count; ++k) {
+            const int index = s.first + k * s.step;
+            renderer.render(index, image, truth);
+            hal::Frame f;
+            f.format = fmt;
+            f.data = image.bgr.data();
+            std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs{};
+            const std::size_t n = segmenter.segment(f, blobs);
+            const std::uint64_t hash = fnv1a(segmenter.mask());
+            for (std::size_t b = 0; b < std::max<std::size_t>(n, 1); ++b, ++row) {
+                const GestureBlob& g = blobs[b];
+                const GestureFeatures& e = g.features;
+                const GoldenBlob got{s.scenario,
+                                     index,
+                                     static_cast<int>(n),
+                                     hash,
+                                     n ? g.tip.x : 0,
+                                     n ? g.tip.y : 0,
+                                     n ? g.radius_px : 0,
+                                     n ? g.entries : 0,
+                                     e.compactness,
+                                     e.roughness,
+                                     e.elongation,
+                                     e.feret_elongation,
+                                     e.max_changes,
+                                     e.min_changes,
+                                     e.solidity,
+                                     e.hu1,
+                                     e.hu2};
+                if (dump) {
+                    std::printf(
+                        "    {\"%s\", %d, %d, 0x%016llxull, %.17g, %.17g, %.17g, %d, %.17g, "
+                        "%.17g, %.17g, %.17g, %d, %d, %.17g, %.17g, %.17g},\n",
+                        got.scenario, got.frame, got.blobs,
+                        static_cast<unsigned long long>(got.mask_hash), got.tip_x, got.tip_y,
+                        got.radius, got.entries, got.compactness, got.roughness, got.elongation,
+                        got.feret, got.max_changes, got.min_changes, got.solidity, got.hu1,
+                        got.hu2);
+                    continue;
+                }
+                ASSERT_LT(row, std::size(kGolden)) << "more rows than the table";
+                const GoldenBlob& want = kGolden[row];
+                SCOPED_TRACE(std::string(s.scenario) + " frame " + std::to_string(index) + " at " +
+                             std::to_string(s.width) + " blob " + std::to_string(b));
+                EXPECT_EQ(got.blobs, want.blobs);
+                EXPECT_EQ(got.mask_hash, want.mask_hash);
+                EXPECT_EQ(got.tip_x, want.tip_x);
+                EXPECT_EQ(got.tip_y, want.tip_y);
+                EXPECT_EQ(got.radius, want.radius);
+                EXPECT_EQ(got.entries, want.entries);
+                EXPECT_EQ(got.compactness, want.compactness);
+                EXPECT_EQ(got.roughness, want.roughness);
+                EXPECT_EQ(got.elongation, want.elongation);
+                EXPECT_EQ(got.feret, want.feret);
+                EXPECT_EQ(got.max_changes, want.max_changes);
+                EXPECT_EQ(got.min_changes, want.min_changes);
+                EXPECT_EQ(got.solidity, want.solidity);
+                EXPECT_EQ(got.hu1, want.hu1);
+                EXPECT_EQ(got.hu2, want.hu2);
+            }
+        }
+    }
+    if (!dump) {
+        EXPECT_EQ(row, std::size(kGolden));
+    }
+}
+
+TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
+    const std::string root = ENDOTOWER_SOURCE_DIR;
+    std::string error;
+    ToolLikelihood model;
+    GestureClassifier classifier;
+    ASSERT_TRUE(model.load(root + "/board/sim/models/tool_likelihood.bin", error)) << error;
+    ASSERT_TRUE(classifier.load(root + "/board/sim/models/gestures.yml", error)) << error;
+    scene::Scenario scenario;
+    ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml",
+                                     scenario, error))
+        << error;
+    scenario.width = 1920;
+    scenario.height = 1080;
+    scene::SceneRenderer renderer;
+    ASSERT_TRUE(renderer.init(scenario, 312, error)) << error;
+    std::vector<scene::Image> images(2);
+    scene::FrameTruth truth;
+    renderer.render(0, images[0], truth);
+    renderer.render(8, images[1], truth);
+    GestureSegmenter segmenter(&model, {});
+    const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
+    segmenter.configure(fmt);
+    std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs{};
+    auto run = [&](int frames) {
+        int classified = 0;
+        for (int i = 0; i < frames; ++i) {
+            hal::Frame f;
+            f.format = fmt;
+            f.data = images[static_cast<std::size_t>(i) % images.size()].bgr.data();
+            const std::size_t n = segmenter.segment(f, blobs);
+            for (std::size_t b = 0; b < n; ++b)
+                classified += classifier.classify(blobs[b].features).label >= 0;
+        }
+        return classified;
+    };
+    EXPECT_EQ(run(2), 4);  // warm: two tools a frame
+    test::set_counting(true);
+    const int classified = run(6);
+    test::set_counting(false);
+    EXPECT_EQ(classified, 12);
+    if (test::heap_allocations() < 0) GTEST_SKIP() << "allocations not counted (sanitizer)";
+    EXPECT_EQ(test::heap_allocations(), 0);
+    EXPECT_EQ(test::c_allocations(), 0);
+}
