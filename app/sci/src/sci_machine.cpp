@@ -212,6 +212,36 @@ void SciMachine::functions(const SciFrame& f) {
     }
 }
 
+bool SciMachine::cross_held(const SciFrame& f) {
+    const double still_px = params_.still_fraction * width_;
+    const bool formed =
+        f.gesture == SciGesture::kCross && (!cross_holding_ || f.gesture_held_ms < last_held_ms_);
+    bool restart = f.gesture != SciGesture::kCross || formed;
+    // Every tool seen must be near where one was when the hold began; a tool the tracker
+    // drops meanwhile (crossed shafts merge) is no motion.
+    for (int i = 0; i < f.tool_count && !restart; ++i) {
+        const SciTool& t = f.tools[static_cast<std::size_t>(i)];
+        bool near = false;
+        for (int k = 0; k < cross_anchors_; ++k) {
+            const auto& a = cross_anchor_[static_cast<std::size_t>(k)];
+            near = near || std::hypot(t.x - a[0], t.y - a[1]) <= still_px;
+        }
+        restart = !near;
+    }
+    if (restart) {
+        cross_holding_ = f.gesture == SciGesture::kCross;
+        // A cross just formed dates from the gesture's own hold (it may date a few frames
+        // back, GestureHold); one restarted by a tool's motion from now.
+        cross_still_start_ = formed ? f.t_ns - ms_to_ns(f.gesture_held_ms) : f.t_ns;
+        cross_anchors_ = f.tool_count;
+        for (int i = 0; i < f.tool_count; ++i)
+            cross_anchor_[static_cast<std::size_t>(i)] = {f.tools[static_cast<std::size_t>(i)].x,
+                                                          f.tools[static_cast<std::size_t>(i)].y};
+    }
+    return cross_holding_ && f.gesture_held_ms >= params_.cross_hold_ms &&
+           f.t_ns - cross_still_start_ >= ms_to_ns(params_.cross_hold_ms);
+}
+
 void SciMachine::step(const SciFrame& f) {
     event_ = {};
     dwell_fraction_ = activation_fraction_ = 0;
@@ -253,8 +283,7 @@ void SciMachine::step(const SciFrame& f) {
     }
 
     // A cross held still (fig. 3.34a): the quadrant menu when inactive, else off.
-    if (f.gesture == SciGesture::kCross && cross_armed_ &&
-        f.gesture_held_ms >= params_.cross_hold_ms) {
+    if (cross_held(f) && cross_armed_) {
         cross_armed_ = false;
         if (active()) {
             deactivate("deactivate");

@@ -5,10 +5,16 @@
 // and fig. 3.23 at 1280x720 (cv::resize), likelihood segmentation with the shipped
 // model; one suite with the book's morphology.
 // ENDOTOWER_GOLDEN_DUMP=1 prints the table below from the current code instead.
+// Bit for bit on x86-64, where the table was recorded. Elsewhere (arm64 under qemu in
+// CI) the renderer's, the model's and OpenCV's floating point round differently (fused
+// multiply-add, other SIMD paths): a few mask pixels move at the shaft's edge, so the
+// mask hash is not compared, the counts must still be equal, the tips within 2 px and
+// the features within 1 % (measured on arm64: 1.54 px, 0.66 %).
 // Also: segmentation + features + classification allocate nothing per frame (operator
 // new and the C allocator counted, heap_counter.cpp; not under the sanitizers).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -29,6 +35,21 @@ void set_counting(bool on);
 }  // namespace endotower::vision::test
 
 namespace {
+
+#if defined(__x86_64__)
+constexpr bool kExact = true;
+#else
+constexpr bool kExact = false;
+#endif
+constexpr double kTipPx = 2.0, kFeature = 0.01;
+
+// Equal on x86-64; within `tolerance` elsewhere (the file's comment says why).
+void near(const char* what, double got, double want, double tolerance) {
+    if (kExact)
+        EXPECT_EQ(got, want) << what;
+    else
+        EXPECT_NEAR(got, want, std::abs(tolerance)) << what;
+}
 
 std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) {
     std::uint64_t h = 1469598103934665603ull;
@@ -120,20 +141,22 @@ TEST(GestureSegmenterGolden, SameMaskTipsAndFeaturesAsTheOpenCvImplementation) {
                 SCOPED_TRACE(std::string(s.scenario) + " frame " + std::to_string(index) + " at " +
                              std::to_string(s.width) + " blob " + std::to_string(b));
                 EXPECT_EQ(got.blobs, want.blobs);
-                EXPECT_EQ(got.mask_hash, want.mask_hash);
-                EXPECT_EQ(got.tip_x, want.tip_x);
-                EXPECT_EQ(got.tip_y, want.tip_y);
-                EXPECT_EQ(got.radius, want.radius);
                 EXPECT_EQ(got.entries, want.entries);
-                EXPECT_EQ(got.compactness, want.compactness);
-                EXPECT_EQ(got.roughness, want.roughness);
-                EXPECT_EQ(got.elongation, want.elongation);
-                EXPECT_EQ(got.feret, want.feret);
                 EXPECT_EQ(got.max_changes, want.max_changes);
                 EXPECT_EQ(got.min_changes, want.min_changes);
-                EXPECT_EQ(got.solidity, want.solidity);
-                EXPECT_EQ(got.hu1, want.hu1);
-                EXPECT_EQ(got.hu2, want.hu2);
+                if (kExact) {
+                    EXPECT_EQ(got.mask_hash, want.mask_hash);
+                }
+                near("tip_x", got.tip_x, want.tip_x, kTipPx);
+                near("tip_y", got.tip_y, want.tip_y, kTipPx);
+                near("radius", got.radius, want.radius, kFeature * want.radius);
+                near("compactness", got.compactness, want.compactness, kFeature * want.compactness);
+                near("roughness", got.roughness, want.roughness, kFeature * want.roughness);
+                near("elongation", got.elongation, want.elongation, kFeature * want.elongation);
+                near("feret", got.feret, want.feret, kFeature * want.feret);
+                near("solidity", got.solidity, want.solidity, kFeature * want.solidity);
+                near("hu1", got.hu1, want.hu1, kFeature * want.hu1);
+                near("hu2", got.hu2, want.hu2, kFeature * want.hu2);
             }
         }
     }

@@ -148,7 +148,9 @@ TEST(GestureHold, ShortDropoutsKeepTheHoldARealChangeDatesFromItsFirstFrame) {
     GestureHold strict({1000.0, 0.03, 0.0});
     for (int i = 0; i < 12; ++i) {
         const GestureHold::State s = strict.update(i == 10 ? -1 : 2, {100.0, 50.0}, i * frame, 5.0);
-        if (i == 11) EXPECT_DOUBLE_EQ(s.held_ms, 0.0);
+        if (i == 11) {
+            EXPECT_DOUBLE_EQ(s.held_ms, 0.0);
+        }
     }
 }
 

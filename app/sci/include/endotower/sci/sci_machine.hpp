@@ -12,6 +12,10 @@
 // Inputs: button press = activate / click the highlighted item / place the box;
 // long press = deactivate; wheel = move the highlight (images in the viewer); a cross
 // held `cross_hold_ms` opens the quadrant menu when inactive and deactivates otherwise.
+// A cross is held only while the tracked tools are still, too: each tool's tip within
+// `still_fraction` x width of where it was when the hold began (a tool sliding along its
+// shaft leaves the crossing, and so the gesture's region, unchanged: surgery, not a
+// command; docs/sci.md "False activations").
 // event() names what happened this frame (docs/sci.md lists them), or is empty.
 // Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
 // hold 1000 ms, confirm window 2000 ms, loop 300 deg of turning, activation area the
@@ -62,6 +66,7 @@ struct SciParams {
     SciLayout layout = SciLayout::kThreeLevel;
     double dwell_ms = 2000, activation_hold_ms = 3000, cross_hold_ms = 1000, confirm_ms = 2000;
     double loop_deg = 300;
+    double still_fraction = 0.03;  // of the width: a tool's tip "still" during a cross hold
     double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
     std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)
     Vec3d box_target_mm{20, 10, 90};
@@ -108,6 +113,7 @@ private:
     void point(const SciFrame& f);
     void functions(const SciFrame& f);
     void track_loop(const SciFrame& f);
+    bool cross_held(const SciFrame& f);
 
     SciParams params_;
     SciMenuTable menus_{};
@@ -125,6 +131,11 @@ private:
     std::string_view event_;
     double dwell_fraction_ = 0, activation_fraction_ = 0;
     bool cross_armed_ = true;
+    // The tools' tips when the cross's still hold began (restarted when one moves).
+    std::array<std::array<double, 2>, 2> cross_anchor_{};
+    int cross_anchors_ = 0;
+    bool cross_holding_ = false;
+    hal::Nanos cross_still_start_ = 0;
     bool rearm_ = false;            // after a click the tip must leave the items first
     bool wheel_highlight_ = false;  // the highlight came from the wheel, not the tip
     hal::Nanos activation_start_ = 0;
