@@ -584,9 +584,15 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
                 // rim, not nearer (the lateral position still counts).
                 if (c.end_hidden) {
                     const double ux = std::cos(pa * M_PI / 180.0), uy = std::sin(pa * M_PI / 180.0);
-                    const double along = (tip.x - predicted[track_of[k]].x) * ux +
-                                         (tip.y - predicted[track_of[k]].y) * uy;
-                    if (along > 0) tip.x -= along * ux, tip.y -= along * uy;
+                    double along = (tip.x - predicted[track_of[k]].x) * ux +
+                                   (tip.y - predicted[track_of[k]].y) * uy;
+                    // At most two widths of the other tool on: a hidden end lies under
+                    // its shaft, not wherever a prediction on a wrong speed has gone.
+                    const double under = 2 * std::max(w.tracks[1 - track_of[k]].width, t.width);
+                    if (along > 0) {
+                        along = std::min(along, under);
+                        tip.x -= along * ux, tip.y -= along * uy;
+                    }
                 }
                 // A part of a shared region that jumped away from the prediction belongs
                 // to the other tool (a jaw across its shaft); the track coasts. The gate:
@@ -608,6 +614,12 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             t.rim_end = c.rim_end;
             if (!c.split || t.width <= 0) t.width = c.width;
             t.confidence = c.confidence;
+        }
+        if (coast && rim_distance(t.tip().x, t.tip().y) <= 0) {
+            // A prediction that left the picture is no tool: a tip is where a tool ends
+            // inside the view (a tool leaving, or a prediction run off on a wrong speed).
+            t = Track{};
+            continue;
         }
         ToolEstimate& e = out[count++];
         e = ToolEstimate{};

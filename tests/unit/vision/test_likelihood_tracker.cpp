@@ -246,6 +246,32 @@ TEST(LikelihoodToolTracker, CrossingKeepsIdentitiesFrameByFrame) {
     EXPECT_NE(ids[0], ids[1]);
 }
 
+// A tip that comes fast under the other tool's shaft and stops there, hidden (two tools
+// at rest, one against the other: surgery_motion). The prediction must not run on at
+// the old speed, out past the other shaft and the picture: for 40 frames of rest the
+// hidden tool, while reported, stays within two widths of the truth, and no tip is
+// ever reported outside the lit circle.
+TEST(LikelihoodToolTracker, AHiddenTipAtRestIsNotCarriedOnByItsOldSpeed) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    const Shaft b{{330, 170}, 90, 16};
+    for (int t = 0; t < 48; ++t) {
+        // A's tip moves right 12 px a frame until it is under B's shaft (x 322-338).
+        const Shaft a{{250.0 + 12 * std::min(t, 7), 250}, 185, 24};
+        cv::Mat img = scope_frame({a, b});
+        if (t == 0) tracker.configure(view(img).format);
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        const std::size_t n = tracker.track(view(img), out);
+        for (std::size_t k = 0; k < n; ++k) {
+            EXPECT_LT(std::hypot(out[k].tip.x - 320, out[k].tip.y - 240), 230)
+                << "frame " << t << " tip " << out[k].tip.x << "," << out[k].tip.y;
+            if (angle_diff(out[k].axis_deg, a.dir_deg) < 20) {
+                EXPECT_LT(std::hypot(out[k].tip.x - a.tip.x, out[k].tip.y - a.tip.y), 2 * a.width)
+                    << "frame " << t << " tip " << out[k].tip.x << "," << out[k].tip.y;
+            }
+        }
+    }
+}
+
 // The simulator's hard case (two_tools_crossing): a wide grasper with open jaws (a V)
 // sweeps over a thin tool's tip; one jaw runs along the thin shaft, so a line fitted to
 // the shared region takes the jaw for the thin tool. Both tools are reported in every
