@@ -50,6 +50,10 @@ constexpr double kGateSigmas = 4.0, kAngleGateDeg = 20.0;
 // live track's continuation: summed cost (tip distance in widths + turn in
 // kAngleGateDeg) at most this.
 constexpr double kContinuationCost = 2.0;
+// Per frame, the share of a track's speed kept while its end is hidden under the other
+// tool (measured then only up to the prediction): a crossing's tip reappears within a
+// few frames, a tip at rest must not creep on.
+constexpr double kHiddenVelocityDamping = 0.8;
 
 double angle_diff_deg(double a, double b) {
     return std::abs(std::remainder(a - b, 360.0));
@@ -592,6 +596,10 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
                     if (along > 0) {
                         along = std::min(along, under);
                         tip.x -= along * ux, tip.y -= along * uy;
+                        // The end seen says nothing of the speed: the prediction's own
+                        // fades (a hidden tip at rest is not carried on by it).
+                        t.x.damp_velocity(kHiddenVelocityDamping);
+                        t.y.damp_velocity(kHiddenVelocityDamping);
                     }
                 }
                 // A part of a shared region that jumped away from the prediction belongs
