@@ -30,6 +30,39 @@ struct GestureSegmenter::Work {
     std::vector<Region> regions;
 };
 
+namespace {
+
+// The region's arms leaving the tip window: runs of region pixels on the circle of
+// radius `r` about (cx, cy) in `win` (window pixels; outside it counts as empty).
+// A tool's end: one (its shaft); two crossing tools' jaws: two (the two shafts); a
+// point along a shaft: two, opposite, or more where another tool passes. 0 when the
+// circle misses the region (the window holds all of it) or lies wholly inside it.
+int count_arms(const cv::Mat& win, double cx, double cy, double r) {
+    const int n = std::clamp(static_cast<int>(2 * M_PI * r), 16, 720);
+    auto set = [&](int i) {
+        const double a = 2 * M_PI * i / n;
+        const int x = static_cast<int>(std::lround(cx + r * std::cos(a)));
+        const int y = static_cast<int>(std::lround(cy + r * std::sin(a)));
+        return x >= 0 && y >= 0 && x < win.cols && y < win.rows && win.at<std::uint8_t>(y, x) != 0;
+    };
+    int start = -1;
+    for (int i = 0; i < n && start < 0; ++i)
+        if (!set(i)) start = i;
+    if (start < 0) return 0;  // all set: no end here
+    int arms = 0, run = 0;
+    for (int k = 1; k <= n; ++k) {
+        if (set((start + k) % n)) {
+            ++run;
+        } else {
+            if (run >= 2) ++arms;
+            run = 0;
+        }
+    }
+    return arms;
+}
+
+}  // namespace
+
 GestureSegmenter::GestureSegmenter(const ToolLikelihood* model, GestureSegmenterParams params)
     : model_(model), params_(params), work_(std::make_unique<Work>()) {}
 GestureSegmenter::~GestureSegmenter() = default;
@@ -270,6 +303,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
                 win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
         }
         GestureBlob& b = out[found];
+        b.arms = count_arms(win, tx - x0, ty - y0, R - 1.5);  // before the tracer marks it
         b.features = measure_gesture_features(win.data, win.cols, win.rows,
                                               static_cast<int>(win.step), w.tracer);
         if (!b.features.valid) continue;

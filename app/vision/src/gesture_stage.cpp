@@ -48,7 +48,10 @@ void GestureStage::process(app::AnalysisContext& ctx) {
     std::array<GestureResult, GestureSegmenter::kMaxBlobs> results{};
     for (std::size_t i = 0; i < n; ++i) {
         results[i] = classifier_.classify(blobs_[i].features);
-        if (results[i].confidence < params_.min_confidence) results[i].label = -1;
+        // A tip window that no arm leaves holds the whole region, not jaws: a thick tool
+        // near the scope widened it past the picture (docs/gestures.md, "No arm").
+        if (results[i].confidence < params_.min_confidence || blobs_[i].arms == 0)
+            results[i].label = -1;
     }
     // One region with a gesture: it is the frame's; two: two single-tool calls.
     std::size_t gestures = 0, which = 0;
@@ -81,6 +84,7 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         else
             ctx.trace.null_field("label");
         ctx.trace.field("confidence", results[i].confidence)
+            .field("arms", blobs_[i].arms)
             .begin_array("tip_px")
             .value(blobs_[i].tip.x)
             .value(blobs_[i].tip.y)

@@ -57,6 +57,7 @@ struct GestureBlob {
     Point2 tip;            // input frame pixels
     double radius_px = 0;  // shaft radius, input frame pixels
     int entries = 1;       // rim entries: 2 = two tools in one region
+    int arms = 0;          // the region's runs across the tip window's edge
     GestureFeatures features;
 };
 

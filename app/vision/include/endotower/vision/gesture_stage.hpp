@@ -4,7 +4,9 @@
 // (GestureClassifier). One region with a gesture = the frame's gesture (a single tool,
 // or two crossing tools: cross / triangle / double triangle); two are two single-tool
 // calls (fig. 3.21) and the frame's label is null (each tool's own is listed).
-// A label below `min_confidence` (0.5) counts as none.
+// A label below `min_confidence` (0.5) counts as none; so does a region whose tip
+// window no arm leaves (GestureBlob::arms 0: the window holds the whole region, so its
+// shape is not the jaws'; two tools at rest against each other read as a cross).
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
 // the hold began; moving starts a new hold. Another label (or none) for at most
@@ -14,7 +16,7 @@
 // clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
-//               "tools": [{"label", "confidence", "tip_px": [x, y]}]}
+//               "tools": [{"label", "confidence", "arms", "tip_px": [x, y]}]}
 // Overlay: a square at each classified tip, filled when the gesture has fired.
 // Borrows the segmenter and the classifier. current(): this frame's gesture for the
 // stages after it in the chain (the SCI).
