@@ -91,7 +91,7 @@ def activation(name, tip, seed, poses):
     """One tool's tip in the SCI's activation area (fig. 3.31: the bottom of the view,
     the middle 40 % of its width), from incisions below and above, left and right, at
     random roll and depth, open then closed: the pose the SCI asks the scissors to hold.
-    A held-out test set only (docs/gestures.md: the shipped model was not trained on it)."""
+    Seeds 607/608 train the single-tool network; 614 is the held-out test set."""
     r = random.Random(seed)
     pivots = [(110, 60), (-110, 60), (90, -60), (-90, -60)]
     tools = []
@@ -127,6 +127,10 @@ def main():
         "train_scissors_left.yaml": single("train_scissors_left", "scissors", 604, 40, -1),
         "train_double.yaml": double("train_double", 605, 40),
         "train_apart.yaml": apart("train_apart", 606, 30),
+        # For the single-tool network only (train-gestures --single-tool-scene): the
+        # SCI's activation pose (docs/gestures.md, "Two networks").
+        "single_activation_scissors.yaml": activation("single_activation_scissors", "scissors", 607, 40),
+        "single_activation_grasper.yaml": activation("single_activation_grasper", "grasper", 608, 40),
         "test_activation_scissors.yaml": activation("test_activation_scissors", "scissors", 614, 10),
         "test_random_grasper.yaml": single("test_random_grasper", "grasper", 611, 10, 1),
         "test_random_scissors.yaml": single("test_random_scissors", "scissors", 612, 10, 1),

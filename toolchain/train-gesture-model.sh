@@ -2,7 +2,8 @@
 # Trains the shipped tool-gesture model (board/sim/models/gestures.yml) from the
 # random-pose training scenarios (board/sim/scenarios/gestures/train_*.yaml, written
 # by toolchain/gen-gesture-scenarios.py) rendered at seed 9006, a seed no test suite
-# uses. The fig322/fig323/fig312 suites at their own seeds and test_random_* are the
+# uses; with the extended features two networks, the single-tool one also trained on
+# single_*.yaml (the SCI's activation pose; docs/gestures.md, "Two networks"). The fig322/fig323/fig312 suites at their own seeds and test_random_* are the
 # held-out test sets (docs/gestures.md). Deterministic: same bytes every run.
 # Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended]
 #        [--segmentation likelihood|morphology]   (default: the shipped model)
@@ -20,5 +21,16 @@ for f in "$root"/board/sim/scenarios/gestures/train_*.yaml; do
   [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
   args+=(--scene "$work/$s")
 done
+case " $* " in
+  *" book "*) ;;  # the book's baseline: one 6-20-7 network
+  *)
+    args+=(--networks two)
+    for f in "$root"/board/sim/scenarios/gestures/single_*.yaml; do
+      s=$(basename "$f" .yaml)
+      [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+      args+=(--single-tool-scene "$work/$s")
+    done
+    ;;
+esac
 mkdir -p "$(dirname "$out")"
 "$bin" train-gestures "${args[@]}" --tool-model "$root/board/sim/models/tool_likelihood.bin" --out "$out" "$@"

@@ -70,7 +70,7 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
                 ++stats.unlabelled;
                 continue;
             }
-            out.push_back({blobs[b].features, label});
+            out.push_back({blobs[b].features, label, blobs[b].entries});
         }
     }
     return true;

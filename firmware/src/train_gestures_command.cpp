@@ -18,7 +18,8 @@ void print_help() {
         "                                [--features book|extended] [--segmentation "
         "likelihood|morphology]\n"
         "                                [--tool-model FILE] [--every N] [--hidden N] "
-        "[--iterations N]\n\n"
+        "[--iterations N]\n"
+        "                                [--networks one|two]\n\n"
         "Trains the gesture network (docs/gestures.md) on the tip regions of labelled\n"
         "recordings and writes the model file atomically.\n\n"
         "  --scene DIR        training recording: DIR/frames/*.png and DIR/truth.jsonl (the "
@@ -32,6 +33,12 @@ void print_help() {
         "  --every N          use every N-th frame (default 1)\n"
         "  --hidden N         hidden units (default 20)\n"
         "  --iterations N     backpropagation epochs (default 3000)\n"
+        "  --networks N       one (default): one network for every region; two (extended):\n"
+        "                     one for single tools, one for two-tool regions (cross, triangle,\n"
+        "                     double triangle, where the segmenter sees two entries);\n"
+        "                     both learn from the --scene recordings, the single-tool one\n"
+        "                     also from the --single-tool-scene ones\n"
+        "  --single-tool-scene DIR  a recording for the single-tool network only (two)\n"
         "  --out FILE         the model file (e.g. board/sim/models/gestures.yml)\n\n"
         "Exit status: 0 written, 1 could not train or write, 2 bad usage or input.\n");
 }
@@ -51,7 +58,7 @@ bool whole(const std::string& v, long lo, long hi, long& out) {
 }  // namespace
 
 int run_train_gestures_command(const Args& args) {
-    std::vector<std::string> scenes, tests;
+    std::vector<std::string> scenes, single_scenes, tests;
     std::string out, tool_model_path;
     vision::GestureTrainParams params;
     params.features = vision::GestureFeatureSet::kExtended;
@@ -66,6 +73,8 @@ int run_train_gestures_command(const Args& args) {
         const std::string& v = args[++i];
         if (k == "--scene")
             scenes.push_back(v);
+        else if (k == "--single-tool-scene")
+            single_scenes.push_back(v);
         else if (k == "--test")
             tests.push_back(v);
         else if (k == "--out")
@@ -89,6 +98,10 @@ int run_train_gestures_command(const Args& args) {
         } else if (k == "--hidden") {
             if (!whole(v, 1, 1000, hidden))
                 return usage_error("--hidden needs a whole number in 1..1000, got '" + v + "'");
+        } else if (k == "--networks") {
+            if (v != "one" && v != "two")
+                return usage_error("--networks: expected one or two, got '" + v + "'");
+            params.two_tool_network = v == "two";
         } else if (k == "--iterations") {
             if (!whole(v, 1, 1000000, iterations))
                 return usage_error("--iterations needs a whole number >= 1, got '" + v + "'");
@@ -116,6 +129,15 @@ int run_train_gestures_command(const Args& args) {
         if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
                                  params.features == vision::GestureFeatureSet::kExtended))
             return usage_error(error);
+    if (!single_scenes.empty() && !params.two_tool_network)
+        return usage_error("--single-tool-scene needs --networks two");
+    for (const std::string& d : single_scenes) {
+        const std::size_t from = samples.size();
+        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
+                                 true))
+            return usage_error(error);
+        for (std::size_t i = from; i < samples.size(); ++i) samples[i].single_tool_only = true;
+    }
     std::array<int, vision::kGestureLabelCount + 1> per_class{};
     for (const auto& s : samples) ++per_class[s.label];
     std::printf("train-gestures: %d frames, %d tip regions, %d unlabelled, %zu samples:",
@@ -136,7 +158,7 @@ int run_train_gestures_command(const Args& args) {
         std::array<int, vision::kGestureLabelCount + 1> total{}, right{};
         for (const auto& s : held_out) {
             ++total[s.label];
-            const int got = classifier.classify(s.features).label;
+            const int got = classifier.classify(s.features, s.entries).label;
             if (got == s.label || (got < 0 && s.label == vision::kNotATool)) ++right[s.label];
         }
         std::printf("test %s:", d.c_str());

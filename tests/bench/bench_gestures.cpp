@@ -62,7 +62,7 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
         const auto t0 = std::chrono::steady_clock::now();
         const std::size_t n = segmenter.segment(f, blobs);
         for (std::size_t b = 0; b < n; ++b)
-            found += classifier.classify(blobs[b].features).label >= 0;
+            found += classifier.classify(blobs[b].features, blobs[b].entries).label >= 0;
         const auto t1 = std::chrono::steady_clock::now();
         allocs += bench::allocations() - a0;
         c_allocs += bench::c_allocations() - c0;

@@ -14,6 +14,7 @@ namespace {
 
 constexpr const char* kMagic = "ETGES1\n";
 constexpr const char* kNode = "opencv_ml_ann_mlp";
+constexpr const char* kTwoToolNode = "two_tool_ann_mlp";
 
 std::uint64_t fnv1a(const char* p, std::size_t n) {
     std::uint64_t h = 1469598103934665603ull;
@@ -38,7 +39,7 @@ int gesture_label_index(const std::string& label) {
 }
 
 struct GestureClassifier::Net {
-    cv::Ptr<cv::ml::ANN_MLP> ann;
+    cv::Ptr<cv::ml::ANN_MLP> ann, two_tool;  // two_tool: empty for one network
     // Per-call buffers, sized once (classify() allocates nothing).
     mutable cv::Mat input = cv::Mat(1, GestureFeatures::kExtendedCount, CV_32F),
                     output = cv::Mat(1, kGestureLabelCount + 1, CV_32F);
@@ -51,19 +52,29 @@ bool GestureClassifier::trained() const {
     return !net_->ann.empty() && net_->ann->isTrained();
 }
 
-bool GestureClassifier::train(const std::vector<GestureSample>& samples,
-                              const GestureTrainParams& params, std::string& error) {
+bool GestureClassifier::has_two_tool_network() const {
+    return !net_->two_tool.empty() && net_->two_tool->isTrained();
+}
+
+namespace {
+
+// One network on the samples `take` accepts.
+template <typename Take>
+cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples, Take take,
+                                       const GestureTrainParams& params, const char* what,
+                                       std::string& error) {
     const bool book = params.features == GestureFeatureSet::kBook;
     const int nf = book ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
     const int classes = book ? kGestureLabelCount : kGestureLabelCount + 1;
     std::array<std::vector<const GestureSample*>, kGestureLabelCount + 1> by_class;
     for (const GestureSample& s : samples)
-        if (s.features.valid && s.label >= 0 && s.label < classes) by_class[s.label].push_back(&s);
+        if (s.features.valid && s.label >= 0 && s.label < classes && take(s))
+            by_class[s.label].push_back(&s);
     std::size_t most = 0;
     for (const auto& c : by_class) most = std::max(most, c.size());
     if (most == 0) {
-        error = "no training samples";
-        return false;
+        error = std::string("no training samples") + what;
+        return {};
     }
     // Equal weight per class: the rarer classes' samples are repeated in turn.
     cv::Mat x(0, nf, CV_32F), y(0, classes, CV_32F);
@@ -86,28 +97,62 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
         ann->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS,
                                               params.iterations, 1e-7));
         if (!ann->train(cv::ml::TrainData::create(x, cv::ml::ROW_SAMPLE, y))) {
-            error = "backpropagation did not converge";
+            error = std::string("backpropagation did not converge") + what;
+            return {};
+        }
+        return ann;
+    } catch (const cv::Exception& e) {
+        error = "training failed" + std::string(what) + ": " + e.msg;
+        return {};
+    }
+}
+
+}  // namespace
+
+bool GestureClassifier::train(const std::vector<GestureSample>& samples,
+                              const GestureTrainParams& params, std::string& error) {
+    cv::Ptr<cv::ml::ANN_MLP> one, two;
+    if (params.two_tool_network) {
+        if (params.features == GestureFeatureSet::kBook) {
+            error = "two networks need the extended features (the book's is one 6-20-7)";
             return false;
         }
-        net_->ann = ann;
-    } catch (const cv::Exception& e) {
-        error = "training failed: " + e.msg;
-        return false;
+        one = train_network(
+            samples, [](const GestureSample&) { return true; }, params, " (single-tool network)",
+            error);
+        if (one.empty()) return false;
+        two = train_network(
+            samples, [](const GestureSample& s) { return !s.single_tool_only; }, params,
+            " (two-tool network)", error);
+        if (two.empty()) return false;
+    } else {
+        one = train_network(
+            samples, [](const GestureSample&) { return true; }, params, "", error);
+        if (one.empty()) return false;
     }
+    net_->ann = one;
+    net_->two_tool = two;
     features_ = params.features;
     segmentation_ = params.segmentation;
     return true;
 }
 
-GestureResult GestureClassifier::classify(const GestureFeatures& f) const {
+namespace {
+
+constexpr bool two_tool_gesture(int label) {
+    return label >= 4 && label < kGestureLabelCount;  // cross, triangle, double triangle
+}
+
+}  // namespace
+
+GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f) const {
     GestureResult r;
-    if (!trained() || !f.valid) return r;
     const int nf = f.count(features_);
     const auto v = f.as_vector();
     cv::Mat in = net_->input.colRange(0, nf);
     for (int k = 0; k < nf; ++k) in.at<float>(0, k) = v[k];
     try {
-        net_->ann->predict(in, net_->output);
+        ann.predict(in, net_->output);
     } catch (const cv::Exception&) {
         return r;
     }
@@ -117,6 +162,19 @@ GestureResult GestureClassifier::classify(const GestureFeatures& f) const {
     r.confidence = std::clamp<double>(o[best], 0.0, 1.0);
     r.label = best < kGestureLabelCount ? best : -1;  // "not a tool": no gesture
     return r;
+}
+
+GestureResult GestureClassifier::classify(const GestureFeatures& f, int entries) const {
+    if (!trained() || !f.valid) return {};
+    if (entries != 2 || !has_two_tool_network()) return run(*net_->ann, f);
+    // Two entries: two tools meeting, or one tool lying along the rim (the activation
+    // pose at the bottom of the view). The two-tool network names the two-tool
+    // gestures; where it sees none, the region is read as a single tool.
+    const GestureResult two = run(*net_->two_tool, f);
+    if (two_tool_gesture(two.label)) return two;
+    GestureResult one = run(*net_->ann, f);
+    if (two_tool_gesture(one.label)) one.label = -1;  // only the two-tool network says those
+    return one;
 }
 
 std::string GestureClassifier::serialise() const {
@@ -129,6 +187,11 @@ std::string GestureClassifier::serialise() const {
         fs << kNode << "{";
         net_->ann->write(fs);
         fs << "}";
+        if (has_two_tool_network()) {
+            fs << kTwoToolNode << "{";
+            net_->two_tool->write(fs);
+            fs << "}";
+        }
         body += fs.releaseAndGetString();
         if (body.back() != '\n') body += '\n';
     }
@@ -171,7 +234,7 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     const int classes =
         fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
     const std::size_t net_at = bytes.find('\n', bytes.find('\n', magic.size()) + 1) + 1;
-    cv::Ptr<cv::ml::ANN_MLP> ann;
+    cv::Ptr<cv::ml::ANN_MLP> ann, two;
     try {
         cv::FileStorage fs(
             bytes.substr(net_at, body_size - net_at),
@@ -179,15 +242,26 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         if (!fs.isOpened() || fs[kNode].empty()) return fail("no network in the file");
         ann = cv::ml::ANN_MLP::create();
         ann->read(fs[kNode]);
+        if (!fs[kTwoToolNode].empty()) {
+            if (fs_set == GestureFeatureSet::kBook)
+                return fail("a two-tool network with the book's features (extended only)");
+            two = cv::ml::ANN_MLP::create();
+            two->read(fs[kTwoToolNode]);
+        }
     } catch (const cv::Exception& e) {
         return fail("unreadable network (" + e.msg + ")");
     }
-    const cv::Mat sizes = ann->getLayerSizes();
-    if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf ||
-        sizes.at<int>(1) < 1 || sizes.at<int>(2) != classes || !ann->isTrained())
-        return fail("the network is not " + std::to_string(nf) + "-N-" + std::to_string(classes) +
-                    " for the '" + features + "' features");
+    for (const cv::Ptr<cv::ml::ANN_MLP>& n : {ann, two}) {
+        if (n.empty()) continue;
+        const cv::Mat sizes = n->getLayerSizes();
+        if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf ||
+            sizes.at<int>(1) < 1 || sizes.at<int>(2) != classes || !n->isTrained())
+            return fail(std::string(n == two ? "the two-tool network" : "the network") +
+                        " is not " + std::to_string(nf) + "-N-" + std::to_string(classes) +
+                        " for the '" + features + "' features");
+    }
     net_->ann = ann;
+    net_->two_tool = two;
     features_ = fs_set;
     segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology
                                                  : GestureSegmentation::kLikelihood;

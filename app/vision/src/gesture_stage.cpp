@@ -47,7 +47,7 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         segmenter_.segment(ctx.frame, std::span<GestureBlob, GestureSegmenter::kMaxBlobs>(blobs_));
     std::array<GestureResult, GestureSegmenter::kMaxBlobs> results{};
     for (std::size_t i = 0; i < n; ++i) {
-        results[i] = classifier_.classify(blobs_[i].features);
+        results[i] = classifier_.classify(blobs_[i].features, blobs_[i].entries);
         // A tip window that no arm leaves holds the whole region, not jaws: a thick tool
         // near the scope widened it past the picture (docs/gestures.md, "No arm").
         if (results[i].confidence < params_.min_confidence || blobs_[i].arms == 0)
@@ -84,6 +84,7 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         else
             ctx.trace.null_field("label");
         ctx.trace.field("confidence", results[i].confidence)
+            .field("entries", blobs_[i].entries)
             .field("arms", blobs_[i].arms)
             .begin_array("tip_px")
             .value(blobs_[i].tip.x)

@@ -102,6 +102,50 @@ TEST(SciScenario, RingMenuExactSequence) {
     fs::remove_all(dir);
 }
 
+// Activation by gesture (fig. 3.31): board/sim/scenarios/sci/scissors_activation.yaml,
+// an open scissors from the lower right held still in the activation area from frame
+// 20, rendered and replayed with the shipped gesture model and the likelihood tracker,
+// no handle events. The SCI starts activating when the scissors arrive, never cancels,
+// and opens the main menu 3.0 s (75 frames at 25 fps) after the hold began, not before:
+// the activation_start frame (the scissors' first still frame, 19 or 20) + 75 or 76.
+TEST(SciScenario, ScissorsHeldInTheActivationAreaActivateAfterThreeSeconds) {
+    const fs::path dir = temp_dir("activation");
+    const std::string src = ENDOTOWER_SOURCE_DIR;
+    auto scene = run_endotower("scene --scenario " + src +
+                               "/board/sim/scenarios/sci/scissors_activation.yaml --frames 100 "
+                               "--out " +
+                               (dir / "scene").string());
+    ASSERT_EQ(scene.status, 0) << scene.output;
+    std::ofstream(dir / "board.yaml")
+        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
+        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
+        << "/board/sim/models/gestures.yml\nsci:\n  layout: three_level\n  media: " << src
+        << "/board/sim/sci_media\n";
+    auto sim =
+        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
+                      (dir / "scene/frames").string() + " --events '' --out " +
+                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
+    ASSERT_EQ(sim.status, 0) << sim.output;
+    std::vector<Step> events;
+    std::ifstream in(dir / "trace.jsonl");
+    for (std::string line; std::getline(in, line);) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        const nlohmann::json& s = j["sci"];
+        const Step st{j["frame"].get<int>(), text(s["state"]), text(s["menu"]),
+                      text(s["highlighted"]), text(s["event"])};
+        if (st.event != "-") events.push_back(st);
+    }
+    ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
+    EXPECT_EQ(events[0].event, "activation_start");
+    EXPECT_EQ(events[0].state, "activating");
+    EXPECT_GE(events[0].frame, 19);
+    EXPECT_LE(events[0].frame, 20);
+    EXPECT_EQ(events[1], (Step{events[1].frame, "menu", "main", "-", "activate_hold"}));
+    EXPECT_GE(events[1].frame - events[0].frame, 75);  // 3.0 s
+    EXPECT_LE(events[1].frame - events[0].frame, 76);
+    fs::remove_all(dir);
+}
+
 TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
     const fs::path dir = temp_dir("board");
     std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";

@@ -245,6 +245,71 @@ TEST(GestureClassifier, CorruptOrWrongModelFilesAreRefused) {
     EXPECT_FALSE(r.trained());
 }
 
+// Two networks: the two-tool network is exactly the one-network model of the unmarked
+// samples (a new single-tool pose, marked single_tool_only, cannot change a two-tool
+// call); a two-entry region whose two-tool reading is no two-tool gesture is read as a
+// single tool (one tool along the rim); the file keeps both; the book's features cannot.
+TEST(GestureClassifier, TwoNetworksKeepTheTwoToolCallsAndReadOneToolAlongTheRim) {
+    std::vector<GestureSample> samples = synthetic_samples(12);
+    for (GestureSample& s : samples) s.entries = s.label >= 4 ? 2 : 1;
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kExtended;
+    p.iterations = 2000;
+    std::string error;
+    GestureClassifier shipped;  // one network, the unmarked samples only
+    ASSERT_TRUE(shipped.train(samples, p, error)) << error;
+    // A new pose of the open scissors (a shape of its own), for single tools only.
+    std::vector<GestureSample> more = samples;
+    for (GestureSample s : synthetic_samples(12)) {
+        if (s.label != 6) continue;
+        s.features.compactness += 9, s.features.elongation += 9;
+        s.label = 2, s.entries = 1, s.single_tool_only = true;
+        more.push_back(s);
+    }
+    p.two_tool_network = true;
+    GestureClassifier c;
+    ASSERT_TRUE(c.train(more, p, error)) << error;
+    EXPECT_TRUE(c.has_two_tool_network());
+    int right = 0, two_tool_calls = 0;
+    for (const auto& s : more) right += c.classify(s.features, s.entries).label == s.label;
+    EXPECT_EQ(right, static_cast<int>(more.size()));
+    for (const auto& s : samples) {
+        if (s.entries != 2) continue;
+        const GestureResult a = c.classify(s.features, 2), b = shipped.classify(s.features, 2);
+        EXPECT_EQ(a.label, b.label);
+        EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
+        ++two_tool_calls;
+    }
+    EXPECT_EQ(two_tool_calls, 36);
+    // A single tool's shape with two entries (lying along the rim): the two-tool network
+    // names no two-tool gesture there, and the single-tool network's call stands.
+    for (const auto& s : samples) {
+        if (s.label < 4) {
+            EXPECT_EQ(c.classify(s.features, 2).label, s.label);
+        }
+    }
+
+    const std::string bytes = c.serialise();
+    EXPECT_NE(bytes.find("two_tool_ann_mlp"), std::string::npos);
+    GestureClassifier back;
+    ASSERT_TRUE(back.parse(bytes, "m.yml", error)) << error;
+    EXPECT_TRUE(back.has_two_tool_network());
+    for (const auto& s : more)
+        for (int entries : {1, 2}) {
+            const GestureResult a = c.classify(s.features, entries),
+                                b = back.classify(s.features, entries);
+            EXPECT_EQ(a.label, b.label);
+            EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
+        }
+    EXPECT_EQ(back.serialise(), bytes);
+    EXPECT_FALSE(shipped.has_two_tool_network());
+
+    p.features = GestureFeatureSet::kBook;
+    GestureClassifier book;
+    EXPECT_FALSE(book.train(more, p, error));
+    EXPECT_NE(error.find("extended"), std::string::npos) << error;
+}
+
 TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
     // A pinkish lit field with a dark shaft from the right border ending in two jaws.
     const int W = 640, H = 480;

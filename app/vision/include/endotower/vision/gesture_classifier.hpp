@@ -12,8 +12,18 @@
 // improved classifier (docs/gestures.md). The segmentation method the model was
 // trained on is stored with it, so the firmware segments the same way.
 //
+// Two networks (`two_tool_network`, extended only): a region with two rim entries
+// (GestureBlob::entries 2: two tools meeting, or one lying along the rim) is read first
+// by the two-tool network, which alone names cross, triangle and double triangle; where
+// it names none of those, and for every other region, the single-tool network decides
+// (a two-tool class from it counts as none). Samples marked `single_tool_only` (a new
+// single-tool pose) train only the single-tool network, so they cannot cost the
+// two-tool gestures; both networks learn from every other sample (docs/gestures.md,
+// "Two networks").
+//
 // File: "ETGES1\n", "features book|extended\n", "segmentation morphology|likelihood\n",
-// the network as OpenCV FileStorage YAML, then "fnv1a " and the FNV-1a 64-bit hash of
+// the network as OpenCV FileStorage YAML (node opencv_ml_ann_mlp; the two-tool network,
+// when there is one, node two_tool_ann_mlp), then "fnv1a " and the FNV-1a 64-bit hash of
 // everything before it as 16 hex digits and "\n". parse()/load() refuse another
 // header, a hash mismatch, or a network that is not features-hidden-7, with a
 // message naming the file (the network must be 6-N-7 or 9-N-8). serialise() gives the bytes (the
@@ -29,6 +39,10 @@
 #include "endotower/vision/gesture_features.hpp"
 #include "endotower/vision/gesture_segmenter.hpp"
 
+namespace cv::ml {
+class ANN_MLP;
+}
+
 namespace endotower::vision {
 
 constexpr int kGestureLabelCount = 7;
@@ -42,13 +56,16 @@ struct GestureTrainParams {
     GestureSegmentation segmentation = GestureSegmentation::kLikelihood;
     int hidden = 20;
     int iterations = 3000;
+    bool two_tool_network = false;  // a second network for two-tool regions (extended)
 };
 
 constexpr int kNotATool = kGestureLabelCount;  // the extended classifier's eighth class
 
 struct GestureSample {
     GestureFeatures features;
-    int label = 0;  // index in kGestureLabels, or kNotATool
+    int label = 0;                  // index in kGestureLabels, or kNotATool
+    int entries = 1;                // the region's rim entries (GestureBlob::entries)
+    bool single_tool_only = false;  // trains only the single-tool network (two networks)
 };
 
 struct GestureResult {
@@ -66,13 +83,16 @@ public:
 
     bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
                std::string& error);
-    GestureResult classify(const GestureFeatures& f) const;
+    // `entries`: the region's rim entries; 2 uses the two-tool network when there is one.
+    GestureResult classify(const GestureFeatures& f, int entries = 1) const;
+    bool has_two_tool_network() const;
 
     std::string serialise() const;
     bool parse(const std::string& bytes, const std::string& name, std::string& error);
     bool load(const std::string& path, std::string& error);
 
 private:
+    GestureResult run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f) const;
     struct Net;
     std::unique_ptr<Net> net_;
     GestureFeatureSet features_ = GestureFeatureSet::kBook;
