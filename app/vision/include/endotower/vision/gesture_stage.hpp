@@ -16,7 +16,7 @@
 // clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
-//               "tools": [{"label", "confidence", "arms", "tip_px": [x, y]}]}
+//               "tools": [{"label", "confidence", "entries", "arms", "tip_px": [x, y]}]}
 // Overlay: a square at each classified tip, filled when the gesture has fired.
 // Borrows the segmenter and the classifier. current(): this frame's gesture for the
 // stages after it in the chain (the SCI).
