@@ -111,24 +111,20 @@ cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples
 
 bool GestureClassifier::train(const std::vector<GestureSample>& samples,
                               const GestureTrainParams& params, std::string& error) {
-    cv::Ptr<cv::ml::ANN_MLP> one, two;
+    if (params.two_tool_network && params.features == GestureFeatureSet::kBook) {
+        error = "two networks need the extended features (the book's is one 6-20-7)";
+        return false;
+    }
+    const cv::Ptr<cv::ml::ANN_MLP> one = train_network(
+        samples, [](const GestureSample&) { return true; }, params,
+        params.two_tool_network ? " (single-tool network)" : "", error);
+    if (one.empty()) return false;
+    cv::Ptr<cv::ml::ANN_MLP> two;
     if (params.two_tool_network) {
-        if (params.features == GestureFeatureSet::kBook) {
-            error = "two networks need the extended features (the book's is one 6-20-7)";
-            return false;
-        }
-        one = train_network(
-            samples, [](const GestureSample&) { return true; }, params, " (single-tool network)",
-            error);
-        if (one.empty()) return false;
         two = train_network(
             samples, [](const GestureSample& s) { return !s.single_tool_only; }, params,
             " (two-tool network)", error);
         if (two.empty()) return false;
-    } else {
-        one = train_network(
-            samples, [](const GestureSample&) { return true; }, params, "", error);
-        if (one.empty()) return false;
     }
     net_->ann = one;
     net_->two_tool = two;
