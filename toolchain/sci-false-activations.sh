@@ -10,7 +10,8 @@
 # each (default 125 = 5 s at 25 fps; longer than the 3 s hold), and SURGERY chunks of
 # board/sim/scenarios/surgery_motion.yaml (two tools working, crossing, holding; 1500
 # frames = 60 s each, seeds 1..SURGERY; frames deleted after the replay, traces kept).
-# Usage: [ENDOTOWER=BINARY] [SURGERY=N] toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
+# Usage: [ENDOTOWER=BINARY] [SURGERY=N | SEEDS="K ..."] toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
+# (SEEDS: those surgery chunks instead of 1..N)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_false}
@@ -26,7 +27,8 @@ for s in t41_speed_0_4 t41_speed_4_8 t41_speed_8_up t41_distractors t41_light_0_
         --out "$out/scene_$s" >/dev/null
     inputs+=("$s=$out/scene_$s/frames")
 done
-for ((k = 1; k <= ${SURGERY:-0}; ++k)); do
+seeds=${SEEDS:-$(seq 1 "${SURGERY:-0}")}
+for k in $seeds; do
     inputs+=("surgery_$k=$out/scene_surgery_$k/frames")
 done
 total_s=0

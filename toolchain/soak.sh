@@ -19,8 +19,8 @@ cmake --build build/release --target endotower -j "$(nproc)" >/dev/null
 bin=build/release/firmware/endotower
 out=build/soak
 rm -rf "$out" && mkdir -p "$out" && : >"$out/events.txt"
-# The sim board at 60 fps (sim.fps), its models by absolute path.
-sed -e "s|models/|$root/board/sim/models/|" -e "s|^  realtime: .*|&\n  fps: 60|" board/sim/board.yaml >"$out/board.yaml"
+# The sim board at 60 fps (sim.fps), its models and SCI media by absolute path.
+sed -e "s|models/|$root/board/sim/models/|" -e "s|sci_media|$root/board/sim/sci_media|g" -e "s|^  realtime: .*|&\n  fps: 60|" board/sim/board.yaml >"$out/board.yaml"
 
 # Frames in one pass of the input (the trace of a one-pass run has one line per frame).
 "$bin" sim --board "$out/board.yaml" --input "$input" --events "$out/events.txt" --out "" \

@@ -2,10 +2,11 @@
 # Trains the shipped tool-gesture model (board/sim/models/gestures.yml) from the
 # random-pose training scenarios (board/sim/scenarios/gestures/train_*.yaml, written
 # by toolchain/gen-gesture-scenarios.py) rendered at seed 9006, a seed no test suite
-# uses; with the extended features two networks, the single-tool one also trained on
-# single_*.yaml (the SCI's activation pose; docs/gestures.md, "Two networks"). The fig322/fig323/fig312 suites at their own seeds and test_random_* are the
-# held-out test sets (docs/gestures.md). Deterministic: same bytes every run.
-# Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended]
+# uses; with the topology (default) or extended features two networks, the single-tool
+# one also trained on single_*.yaml (the SCI's activation pose; docs/gestures.md, "Two
+# networks"). The fig322/fig323/fig312 suites at their own seeds and test_random_* are
+# the held-out test sets (docs/gestures.md). Deterministic: same bytes every run.
+# Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended|topology]
 #        [--segmentation likelihood|morphology]   (default: the shipped model)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

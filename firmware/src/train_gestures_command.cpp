@@ -15,7 +15,8 @@ namespace {
 void print_help() {
     std::printf(
         "usage: endotower train-gestures --scene DIR... [--test DIR]... --out FILE\n"
-        "                                [--features book|extended] [--segmentation "
+        "                                [--features book|extended|topology]\n"
+        "                                [--segmentation "
         "likelihood|morphology]\n"
         "                                [--tool-model FILE] [--every N] [--hidden N] "
         "[--iterations N]\n"
@@ -27,13 +28,15 @@ void print_help() {
         "                     of 'endotower scene', or a hand-labelled clip in that layout)\n"
         "  --test DIR         held-out recording: prints the per-gesture accuracy on its tips\n"
         "  --features F       book: the six features, 6-20-7 (the book's baseline);\n"
-        "                     extended: nine and a 'not a tool' class, 9-20-8 (default)\n"
+        "                     extended: nine and a 'not a tool' class, 9-20-8;\n"
+        "                     topology: those nine and the two largest holes, 11-20-8\n"
+        "                     (default)\n"
         "  --segmentation S   likelihood (default) or morphology (eq. 3.3-3.5)\n"
         "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
         "  --every N          use every N-th frame (default 1)\n"
         "  --hidden N         hidden units (default 20)\n"
         "  --iterations N     backpropagation epochs (default 3000)\n"
-        "  --networks N       one (default): one network for every region; two (extended):\n"
+        "  --networks N       one (default): one network for every region; two (not book):\n"
         "                     one for single tools, one for two-tool regions (cross, triangle,\n"
         "                     double triangle, where the segmenter sees two entries);\n"
         "                     both learn from the --scene recordings, the single-tool one\n"
@@ -61,7 +64,7 @@ int run_train_gestures_command(const Args& args) {
     std::vector<std::string> scenes, single_scenes, tests;
     std::string out, tool_model_path;
     vision::GestureTrainParams params;
-    params.features = vision::GestureFeatureSet::kExtended;
+    params.features = vision::GestureFeatureSet::kTopology;
     long every = 1, hidden = 20, iterations = 3000;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& k = args[i];
@@ -82,10 +85,12 @@ int run_train_gestures_command(const Args& args) {
         else if (k == "--tool-model")
             tool_model_path = v;
         else if (k == "--features") {
-            if (v != "book" && v != "extended")
-                return usage_error("--features: expected book or extended, got '" + v + "'");
-            params.features = v == "book" ? vision::GestureFeatureSet::kBook
-                                          : vision::GestureFeatureSet::kExtended;
+            if (v != "book" && v != "extended" && v != "topology")
+                return usage_error("--features: expected book, extended or topology, got '" + v +
+                                   "'");
+            params.features = v == "book"       ? vision::GestureFeatureSet::kBook
+                              : v == "extended" ? vision::GestureFeatureSet::kExtended
+                                                : vision::GestureFeatureSet::kTopology;
         } else if (k == "--segmentation") {
             if (v != "likelihood" && v != "morphology")
                 return usage_error("--segmentation: expected likelihood or morphology, got '" + v +
@@ -127,7 +132,7 @@ int run_train_gestures_command(const Args& args) {
     GestureDatasetStats stats;
     for (const std::string& d : scenes)
         if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
-                                 params.features == vision::GestureFeatureSet::kExtended))
+                                 params.features != vision::GestureFeatureSet::kBook))
             return usage_error(error);
     if (!single_scenes.empty() && !params.two_tool_network)
         return usage_error("--single-tool-scene needs --networks two");
@@ -155,18 +160,31 @@ int run_train_gestures_command(const Args& args) {
         GestureDatasetStats ts;
         if (!add_gesture_samples(d, segmenter, 1, held_out, ts, error, 0.08, true))
             return usage_error(error);
-        std::array<int, vision::kGestureLabelCount + 1> total{}, right{};
+        constexpr int kClasses = vision::kGestureLabelCount + 1;  // the last: no gesture
+        std::array<int, kClasses> total{}, right{};
+        std::array<std::array<int, kClasses>, kClasses> called{};  // [truth][call]
         for (const auto& s : held_out) {
             ++total[s.label];
             const int got = classifier.classify(s.features, s.entries).label;
             if (got == s.label || (got < 0 && s.label == vision::kNotATool)) ++right[s.label];
+            ++called[s.label][got < 0 ? vision::kNotATool : got];
         }
         std::printf("test %s:", d.c_str());
         for (int c = 0; c < vision::kGestureLabelCount; ++c)
             if (total[c] > 0)
                 std::printf(" %s %d/%d", vision::kGestureLabels[c], right[c], total[c]);
-        std::printf(" | tissue rejected %d/%d\n", right[vision::kNotATool],
-                    total[vision::kNotATool]);
+        std::printf(" | tissue rejected %d/%d", right[vision::kNotATool], total[vision::kNotATool]);
+        const char* sep = " | wrong:";
+        for (int t = 0; t < kClasses; ++t)
+            for (int c = 0; c < kClasses; ++c)
+                if (c != t && called[t][c] > 0) {
+                    auto name = [](int k) {
+                        return k == vision::kNotATool ? "none" : vision::kGestureLabels[k];
+                    };
+                    std::printf("%s %s->%s %d", sep, name(t), name(c), called[t][c]);
+                    sep = ",";
+                }
+        std::printf("\n");
     }
     if (!system::write_file_atomic(out, classifier.serialise(), error)) {
         std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());

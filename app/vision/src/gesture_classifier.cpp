@@ -24,7 +24,9 @@ std::uint64_t fnv1a(const char* p, std::size_t n) {
 }
 
 const char* feature_name(GestureFeatureSet s) {
-    return s == GestureFeatureSet::kBook ? "book" : "extended";
+    return s == GestureFeatureSet::kBook       ? "book"
+           : s == GestureFeatureSet::kExtended ? "extended"
+                                               : "topology";
 }
 const char* segmentation_name(GestureSegmentation s) {
     return s == GestureSegmentation::kMorphology ? "morphology" : "likelihood";
@@ -41,7 +43,7 @@ int gesture_label_index(const std::string& label) {
 struct GestureClassifier::Net {
     cv::Ptr<cv::ml::ANN_MLP> ann, two_tool;  // two_tool: empty for one network
     // Per-call buffers, sized once (classify() allocates nothing).
-    mutable cv::Mat input = cv::Mat(1, GestureFeatures::kExtendedCount, CV_32F),
+    mutable cv::Mat input = cv::Mat(1, GestureFeatures::kTopologyCount, CV_32F),
                     output = cv::Mat(1, kGestureLabelCount + 1, CV_32F);
 };
 
@@ -64,7 +66,7 @@ cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples
                                        const GestureTrainParams& params, const char* what,
                                        std::string& error) {
     const bool book = params.features == GestureFeatureSet::kBook;
-    const int nf = book ? GestureFeatures::kBookCount : GestureFeatures::kExtendedCount;
+    const int nf = GestureFeatures::count(params.features);
     const int classes = book ? kGestureLabelCount : kGestureLabelCount + 1;
     std::array<std::vector<const GestureSample*>, kGestureLabelCount + 1> by_class;
     for (const GestureSample& s : samples)
@@ -112,7 +114,7 @@ cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples
 bool GestureClassifier::train(const std::vector<GestureSample>& samples,
                               const GestureTrainParams& params, std::string& error) {
     if (params.two_tool_network && params.features == GestureFeatureSet::kBook) {
-        error = "two networks need the extended features (the book's is one 6-20-7)";
+        error = "two networks need the extended or topology features (the book's is one 6-20-7)";
         return false;
     }
     const cv::Ptr<cv::ml::ANN_MLP> one = train_network(
@@ -135,13 +137,16 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
 
 namespace {
 
+constexpr int kSingleToolLabels = 4;  // open/closed grasper, open/closed scissors
+
 constexpr bool two_tool_gesture(int label) {
-    return label >= 4 && label < kGestureLabelCount;  // cross, triangle, double triangle
+    return label >= kSingleToolLabels && label < kGestureLabelCount;  // cross, triangles
 }
 
 }  // namespace
 
-GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f) const {
+GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f,
+                                     bool one_tool) const {
     GestureResult r;
     const int nf = f.count(features_);
     const auto v = f.as_vector();
@@ -154,7 +159,12 @@ GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFe
     }
     const float* o = net_->output.ptr<float>(0);
     const int classes = net_->output.cols;
-    const int best = static_cast<int>(std::max_element(o, o + classes) - o);
+    int best = static_cast<int>(std::max_element(o, o + classes) - o);
+    if (one_tool && two_tool_gesture(best)) {
+        // One tool: the best of its own gestures and "not a tool".
+        best = static_cast<int>(std::max_element(o, o + kSingleToolLabels) - o);
+        if (classes > kGestureLabelCount && o[kNotATool] > o[best]) best = kNotATool;
+    }
     r.confidence = std::clamp<double>(o[best], 0.0, 1.0);
     r.label = best < kGestureLabelCount ? best : -1;  // "not a tool": no gesture
     return r;
@@ -162,14 +172,20 @@ GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFe
 
 GestureResult GestureClassifier::classify(const GestureFeatures& f, int entries) const {
     if (!trained() || !f.valid) return {};
-    if (entries != 2 || !has_two_tool_network()) return run(*net_->ann, f);
+    if (!has_two_tool_network()) return run(*net_->ann, f, false);
+    // A region entering the picture once is one tool (both tools of a two-tool gesture
+    // come in through the rim: every such training region has two entries).
+    if (entries != 2) return run(*net_->ann, f, true);
     // Two entries: two tools meeting, or one tool lying along the rim (the activation
     // pose at the bottom of the view). The two-tool network names the two-tool
     // gestures; where it sees none, the region is read as a single tool.
-    const GestureResult two = run(*net_->two_tool, f);
+    const GestureResult two = run(*net_->two_tool, f, false);
     if (two_tool_gesture(two.label)) return two;
-    GestureResult one = run(*net_->ann, f);
-    if (two_tool_gesture(one.label)) one.label = -1;  // only the two-tool network says those
+    // Where the two networks disagree on whether two tools meet, no gesture: measured
+    // better than the best single-tool reading (4 double triangles read as closed
+    // scissors per region; docs/gestures.md).
+    GestureResult one = run(*net_->ann, f, false);
+    if (two_tool_gesture(one.label)) one.label = -1;
     return one;
 }
 
@@ -218,15 +234,16 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     std::istringstream in(bytes.substr(magic.size(), body_size - magic.size()));
     std::string key, features, segmentation;
     in >> key >> features;
-    if (key != "features" || (features != "book" && features != "extended"))
-        return fail("line 2: expected 'features book' or 'features extended'");
+    if (key != "features" ||
+        (features != "book" && features != "extended" && features != "topology"))
+        return fail("line 2: expected 'features book', 'features extended' or 'features topology'");
     in >> key >> segmentation;
     if (key != "segmentation" || (segmentation != "morphology" && segmentation != "likelihood"))
         return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
-    const GestureFeatureSet fs_set =
-        features == "book" ? GestureFeatureSet::kBook : GestureFeatureSet::kExtended;
-    const int nf = fs_set == GestureFeatureSet::kBook ? GestureFeatures::kBookCount
-                                                      : GestureFeatures::kExtendedCount;
+    const GestureFeatureSet fs_set = features == "book"       ? GestureFeatureSet::kBook
+                                     : features == "extended" ? GestureFeatureSet::kExtended
+                                                              : GestureFeatureSet::kTopology;
+    const int nf = GestureFeatures::count(fs_set);
     const int classes =
         fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
     const std::size_t net_at = bytes.find('\n', bytes.find('\n', magic.size()) + 1) + 1;
@@ -240,7 +257,8 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         ann->read(fs[kNode]);
         if (!fs[kTwoToolNode].empty()) {
             if (fs_set == GestureFeatureSet::kBook)
-                return fail("a two-tool network with the book's features (extended only)");
+                return fail(
+                    "a two-tool network with the book's features (extended or topology only)");
             two = cv::ml::ANN_MLP::create();
             two->read(fs[kTwoToolNode]);
         }

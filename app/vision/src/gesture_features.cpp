@@ -61,12 +61,13 @@ int changes_along(const std::uint8_t* mask, int w, int h, int stride, double cx,
 
 }  // namespace
 
-std::array<float, GestureFeatures::kExtendedCount> GestureFeatures::as_vector() const {
+std::array<float, GestureFeatures::kTopologyCount> GestureFeatures::as_vector() const {
     return {static_cast<float>(compactness), static_cast<float>(roughness),
             static_cast<float>(elongation),  static_cast<float>(feret_elongation),
             static_cast<float>(max_changes), static_cast<float>(min_changes),
             static_cast<float>(solidity),    static_cast<float>(hu1),
-            static_cast<float>(hu2)};
+            static_cast<float>(hu2),         static_cast<float>(hole1),
+            static_cast<float>(hole2)};
 }
 
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
@@ -98,6 +99,10 @@ GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, in
     feret(hull, fmax, fmin);
     f.feret_elongation = fmin > 0 ? fmax / fmin : 1.0;
     f.solidity = hull_area > 0 ? area / hull_area : 1.0;
+    int hole1 = 0, hole2 = 0;
+    tracer.holes(hole1, hole2);
+    f.hole1 = hole1 / area;
+    f.hole2 = hole2 / area;
 
     // The scan lines cross at the centroid of all the mask's pixels (open jaws cut
     // off by the window may be apart); Hu moments of the blob's polygon.

@@ -33,8 +33,11 @@ std::span<const IntPoint> ContourTracer::largest(const std::uint8_t* mask, int w
                                                  std::size_t stride, double& area) {
     area = 0;
     best_.clear();
+    last_width_ = last_height_ = 0;
     if (mask == nullptr || width <= 0 || height <= 0 || width > width_ || height > height_)
         return {};
+    last_width_ = width;
+    last_height_ = height;
     const int s = width + 2;
     std::int8_t* img = image_.data();
     std::fill(img, img + static_cast<std::size_t>(s) * (height + 2), std::int8_t{0});
@@ -98,6 +101,39 @@ std::span<const IntPoint> ContourTracer::largest(const std::uint8_t* mask, int w
             }
         }
     return best_;
+}
+
+void ContourTracer::holes(int& largest, int& second) {
+    largest = second = 0;
+    if (last_width_ <= 0) return;
+    const int s = last_width_ + 2, n = s * (last_height_ + 2);
+    std::int8_t* img = image_.data();
+    // 4-connected background fill from `seed` (marking it 3); returns its pixel count.
+    auto fill = [&](int seed) {
+        int count = 0;
+        stack_.clear();
+        stack_.push_back(seed);
+        img[seed] = 3;
+        while (!stack_.empty()) {
+            const int i = stack_.back();
+            stack_.pop_back();
+            ++count;
+            for (const int d : {1, -1, s, -s}) {
+                const int j = i + d;
+                if (j >= 0 && j < n && img[j] == 0) img[j] = 3, stack_.push_back(j);
+            }
+        }
+        return count;
+    };
+    fill(0);  // the zero border: everything outside
+    for (int i = 0; i < n; ++i)
+        if (img[i] == 0) {
+            const int a = fill(i);
+            if (a > largest)
+                second = largest, largest = a;
+            else if (a > second)
+                second = a;
+        }
 }
 
 std::span<const IntPoint> ContourTracer::hull(std::span<const IntPoint> points) {

@@ -116,7 +116,7 @@ TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
     EXPECT_EQ(
         run("train-gestures --scene " + train.string() + " --features six --out " + model.string()),
         2);
-    EXPECT_NE(slurp(dir() / "out.err").find("--features: expected book or extended"),
+    EXPECT_NE(slurp(dir() / "out.err").find("--features: expected book, extended or topology"),
               std::string::npos);
 }
 

@@ -19,9 +19,9 @@ struct Mask {
     int w, h;
     std::vector<std::uint8_t> px;
     Mask(int w_, int h_) : w(w_), h(h_), px(static_cast<std::size_t>(w_) * h_, 0) {}
-    void rect(int x0, int y0, int x1, int y1) {  // inclusive
+    void rect(int x0, int y0, int x1, int y1, std::uint8_t v = 255) {  // inclusive
         for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) px[static_cast<std::size_t>(y) * w + x] = 255;
+            for (int x = x0; x <= x1; ++x) px[static_cast<std::size_t>(y) * w + x] = v;
     }
     GestureFeatures measure() const { return measure_gesture_features(px.data(), w, h, w); }
 };
@@ -87,6 +87,39 @@ TEST(GestureFeatures, OpenJawsCountFourChangesAndAConcaveBlobIsRough) {
     EXPECT_GT(g.roughness, 1.3);
     EXPECT_LT(g.solidity, 0.7);
     EXPECT_FALSE(Mask(10, 10).measure().valid);
+}
+
+TEST(GestureFeatures, HolesAreTheGapsAJawAndACrossingToolClose) {
+    // The U of two jaws alone leaves no hole (its gap is open to the outside) ...
+    Mask u(100, 100);
+    u.rect(20, 30, 80, 39);
+    u.rect(20, 61, 80, 70);
+    u.rect(20, 30, 29, 70);
+    const GestureFeatures open = u.measure();
+    EXPECT_EQ(open.hole1, 0.0);
+    EXPECT_EQ(open.hole2, 0.0);
+    // ... a crossing shaft across its mouth closes one (triangle): 51 x 21 pixels; the
+    // outer polygon through the pixel centres is 64 x 40.
+    u.rect(81, 30, 84, 70);
+    const GestureFeatures tri = u.measure();
+    EXPECT_DOUBLE_EQ(tri.hole1, 51.0 * 21 / (64.0 * 40));
+    EXPECT_EQ(tri.hole2, 0.0);
+    // Two closed gaps (double triangle), the larger first; a one-pixel diagonal gap in
+    // the wall does not open a hole (8-connected blob, 4-connected background).
+    Mask d(100, 100);
+    d.rect(10, 10, 89, 89);
+    d.rect(20, 20, 39, 29, 0);  // 20 x 10
+    d.rect(50, 50, 59, 79, 0);  // 10 x 30
+    const GestureFeatures two = d.measure();
+    EXPECT_DOUBLE_EQ(two.hole1, 300.0 / (79.0 * 79));
+    EXPECT_DOUBLE_EQ(two.hole2, 200.0 / (79.0 * 79));
+    d.rect(40, 30, 40, 30, 0);  // touches the first hole's corner only diagonally
+    EXPECT_DOUBLE_EQ(d.measure().hole2, 200.0 / (79.0 * 79));
+    const auto v = two.as_vector();
+    ASSERT_EQ(v.size(), 11u);
+    EXPECT_FLOAT_EQ(v[9], static_cast<float>(two.hole1));
+    EXPECT_FLOAT_EQ(v[10], static_cast<float>(two.hole2));
+    EXPECT_EQ(GestureFeatures::count(GestureFeatureSet::kTopology), 11);
 }
 
 TEST(GestureHold, FiresOnceAfterExactlyTheHoldTime) {
@@ -239,10 +272,53 @@ TEST(GestureClassifier, CorruptOrWrongModelFilesAreRefused) {
     std::snprintf(tail, sizeof tail, "fnv1a %016llx\n", static_cast<unsigned long long>(h));
     EXPECT_FALSE(r.parse(body + tail, "m.yml", error));
     EXPECT_NE(error.find("not 6-N-7"), std::string::npos) << error;
+    // The same 9-input network labelled with the topology features (11 inputs).
+    body.replace(body.find("features book"), 13, "features topology");
+    h = 1469598103934665603ull;
+    for (char ch : body) h = (h ^ static_cast<std::uint8_t>(ch)) * 1099511628211ull;
+    std::snprintf(tail, sizeof tail, "fnv1a %016llx\n", static_cast<unsigned long long>(h));
+    EXPECT_FALSE(r.parse(body + tail, "m.yml", error));
+    EXPECT_NE(error.find("not 11-N-8 for the 'topology' features"), std::string::npos) << error;
 
     EXPECT_FALSE(r.load("/nonexistent/gestures.yml", error));
     EXPECT_NE(error.find("/nonexistent/gestures.yml: cannot open"), std::string::npos);
     EXPECT_FALSE(r.trained());
+}
+
+// The topology features: 11 inputs (the holes among them), the eighth class, two
+// networks; the file says so and round-trips.
+TEST(GestureClassifier, TopologyFeaturesTrainAndRoundTrip) {
+    std::vector<GestureSample> samples = synthetic_samples(12);
+    for (GestureSample& s : samples) {
+        s.entries = s.label >= 4 ? 2 : 1;
+        // cross: no hole; triangle: one; double triangle: two (the features' point).
+        s.features.hole1 = s.label == 5 ? 0.05 : s.label == 6 ? 0.2 : 0.0;
+        s.features.hole2 = s.label == 6 ? 0.1 : 0.0;
+        if (s.label >= 4) s.features.compactness = s.features.elongation = 3.0;  // alike
+    }
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kTopology;
+    p.two_tool_network = true;
+    p.iterations = 2000;
+    GestureClassifier c;
+    std::string error;
+    ASSERT_TRUE(c.train(samples, p, error)) << error;
+    int right = 0;
+    for (const auto& s : samples) right += c.classify(s.features, s.entries).label == s.label;
+    EXPECT_EQ(right, static_cast<int>(samples.size()));
+    const std::string bytes = c.serialise();
+    EXPECT_NE(bytes.find("features topology\n"), std::string::npos);
+    GestureClassifier back;
+    ASSERT_TRUE(back.parse(bytes, "m.yml", error)) << error;
+    EXPECT_EQ(back.features(), GestureFeatureSet::kTopology);
+    EXPECT_TRUE(back.has_two_tool_network());
+    for (const auto& s : samples) {
+        const GestureResult a = c.classify(s.features, s.entries),
+                            b = back.classify(s.features, s.entries);
+        EXPECT_EQ(a.label, b.label);
+        EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
+    }
+    EXPECT_EQ(back.serialise(), bytes);
 }
 
 // Two networks: the two-tool network is exactly the one-network model of the unmarked
@@ -288,6 +364,18 @@ TEST(GestureClassifier, TwoNetworksKeepTheTwoToolCallsAndReadOneToolAlongTheRim)
             EXPECT_EQ(c.classify(s.features, 2).label, s.label);
         }
     }
+    // A region entering once is one tool: a two-tool shape there is read as the best
+    // single-tool class (or none), never as cross or triangle; one network still names it.
+    int two_tool_shapes = 0;
+    for (const auto& s : samples) {
+        if (s.label < 4) continue;
+        const GestureResult one_entry = c.classify(s.features, 1);
+        EXPECT_LT(one_entry.label, 4) << "label " << s.label;
+        EXPECT_LT(one_entry.confidence, c.classify(s.features, 2).confidence);
+        EXPECT_EQ(shipped.classify(s.features, 1).label, s.label);
+        ++two_tool_shapes;
+    }
+    EXPECT_EQ(two_tool_shapes, 36);
 
     const std::string bytes = c.serialise();
     EXPECT_NE(bytes.find("two_tool_ann_mlp"), std::string::npos);

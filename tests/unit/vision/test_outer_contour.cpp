@@ -3,6 +3,7 @@
 // area and perimeter are cv::contourArea's and cv::arcLength's, on random masks.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
 #include <set>
 
@@ -102,4 +103,45 @@ TEST(ContourTracer, RefusesMasksLargerThanReservedAndEmptyOnes) {
     EXPECT_EQ(polygon_perimeter(c), 6.0);
     EXPECT_EQ(c[0].x, 3);  // the first pixel, in bordered coordinates
     EXPECT_EQ(c[0].y, 4);
+}
+
+// holes(): the two largest background regions the border cannot reach, as OpenCV finds
+// them (flood fill of the background from outside, then 4-connected components of what
+// is left), on random masks; nothing after a refused mask.
+TEST(ContourTracer, HolesAreTheBackgroundTheBorderCannotReach) {
+    ContourTracer tracer;
+    tracer.reserve(90, 70);
+    int with_holes = 0, with_two = 0;
+    for (int seed = 0; seed < 400; ++seed) {
+        const cv::Mat m = random_mask(seed);
+        double area = 0;
+        tracer.largest(m.data, m.cols, m.rows, m.step, area);
+        int first = -1, second = -1;
+        tracer.holes(first, second);
+
+        cv::Mat outside;
+        cv::copyMakeBorder(m, outside, 1, 1, 1, 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+        cv::floodFill(outside, cv::Point(0, 0), cv::Scalar(128), nullptr, cv::Scalar(0),
+                      cv::Scalar(0), 4);
+        const cv::Mat inside = outside == 0;
+        cv::Mat labels, stats, centroids;
+        const int n = cv::connectedComponentsWithStats(inside, labels, stats, centroids, 4);
+        std::vector<int> areas;
+        for (int i = 1; i < n; ++i) areas.push_back(stats.at<int>(i, cv::CC_STAT_AREA));
+        std::sort(areas.rbegin(), areas.rend());
+        areas.resize(std::max<std::size_t>(areas.size(), 2), 0);
+        EXPECT_EQ(first, areas[0]) << "seed " << seed;
+        EXPECT_EQ(second, areas[1]) << "seed " << seed;
+        with_holes += first > 0;
+        with_two += second > 0;
+    }
+    EXPECT_GT(with_holes, 40);  // the masks do leave holes, and pairs of them
+    EXPECT_GT(with_two, 10);
+    std::vector<std::uint8_t> big(100 * 100, 255);
+    double area = 0;
+    tracer.largest(big.data(), 100, 100, 100, area);  // refused: larger than reserved
+    int first = -1, second = -1;
+    tracer.holes(first, second);
+    EXPECT_EQ(first, 0);
+    EXPECT_EQ(second, 0);
 }

@@ -9,26 +9,29 @@
 // `features`: kBook = the six features and seven outputs (the book's 6-20-7
 // baseline), kExtended = nine features and an eighth output, "not a tool" (tissue
 // regions the segmentation mistakes for one; trained on such regions), so 9-20-8: the
-// improved classifier (docs/gestures.md). The segmentation method the model was
-// trained on is stored with it, so the firmware segments the same way.
+// improved classifier (docs/gestures.md); kTopology = those nine and the two hole
+// features, 11-20-8 (shipped: the holes tell cross, triangle and double triangle
+// apart). The segmentation method the model was trained on is stored with it, so the
+// firmware segments the same way.
 //
-// Two networks (`two_tool_network`, extended only): a region with two rim entries
-// (GestureBlob::entries 2: two tools meeting, or one lying along the rim) is read first
+// Two networks (`two_tool_network`, extended or topology): a region with two rim
+// entries (GestureBlob::entries 2: two tools meeting, or one along the rim) is read first
 // by the two-tool network, which alone names cross, triangle and double triangle; where
-// it names none of those, and for every other region, the single-tool network decides
-// (a two-tool class from it counts as none). Samples marked `single_tool_only` (a new
+// it names none of those the single-tool network decides (a two-tool class from it
+// counts as none); a region with one entry is one tool: the single-tool network's best
+// single-tool class or "not a tool". Samples marked `single_tool_only` (a new
 // single-tool pose) train only the single-tool network, so they cannot cost the
 // two-tool gestures; both networks learn from every other sample (docs/gestures.md,
 // "Two networks").
 //
-// File: "ETGES1\n", "features book|extended\n", "segmentation morphology|likelihood\n",
-// the network as OpenCV FileStorage YAML (node opencv_ml_ann_mlp; the two-tool network,
-// when there is one, node two_tool_ann_mlp), then "fnv1a " and the FNV-1a 64-bit hash of
-// everything before it as 16 hex digits and "\n". parse()/load() refuse another
-// header, a hash mismatch, or a network that is not features-hidden-7, with a
-// message naming the file (the network must be 6-N-7 or 9-N-8). serialise() gives the bytes (the
-// caller writes them atomically). classify() is for the per-frame path: no exceptions, no
-// allocation.
+// File: "ETGES1\n", "features book|extended|topology\n",
+// "segmentation morphology|likelihood\n", the network as OpenCV FileStorage YAML (node
+// opencv_ml_ann_mlp; the two-tool network, when there is one, node two_tool_ann_mlp),
+// then "fnv1a " and the FNV-1a 64-bit hash of everything before it as 16 hex digits and
+// "\n". parse()/load() refuse another header, a hash mismatch, or a network that is not
+// features-hidden-classes, with a message naming the file (the network must be 6-N-7,
+// 9-N-8 or 11-N-8). serialise() gives the bytes (the caller writes them atomically).
+// classify() is for the per-frame path: no exceptions, no allocation.
 #pragma once
 
 #include <array>
@@ -92,7 +95,8 @@ public:
     bool load(const std::string& path, std::string& error);
 
 private:
-    GestureResult run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f) const;
+    // one_tool: a two-tool class is not an answer; the best of the others is.
+    GestureResult run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f, bool one_tool) const;
     struct Net;
     std::unique_ptr<Net> net_;
     GestureFeatureSet features_ = GestureFeatureSet::kBook;

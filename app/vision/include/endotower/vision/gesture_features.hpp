@@ -19,7 +19,10 @@
 // A mask without a blob of at least 3 pixels gives valid = false.
 // The extra features of the improved classifier (as_vector(kExtended)): the fill
 // ratio A / area(H), the first Hu moment invariant and the square root of the
-// second (same units).
+// second (same units). The topology features (kTopology: the nine and these two):
+// hole1, hole2 = the two largest holes of the mask (ContourTracer::holes) over A: the
+// gap between a crossing tool and one open jaw (triangle) or two (double triangle),
+// none where closed jaws cross (cross).
 #pragma once
 
 #include <array>
@@ -29,22 +32,25 @@
 
 namespace endotower::vision {
 
-enum class GestureFeatureSet { kBook, kExtended };
+enum class GestureFeatureSet { kBook, kExtended, kTopology };
 
 struct GestureFeatures {
     static constexpr int kScanLines = 10;
-    static constexpr int kBookCount = 6, kExtendedCount = 9;
+    static constexpr int kBookCount = 6, kExtendedCount = 9, kTopologyCount = 11;
     bool valid = false;
     double compactness = 0, roughness = 0, elongation = 0, feret_elongation = 0;
     int max_changes = 0, min_changes = 0;
     double solidity = 0, hu1 = 0, hu2 = 0;
+    double hole1 = 0, hole2 = 0;
     double centroid_x = 0, centroid_y = 0;  // in mask pixels
 
-    // The classifier's input: the book's six, or the six and the three extras.
-    int count(GestureFeatureSet set) const {
-        return set == GestureFeatureSet::kBook ? kBookCount : kExtendedCount;
+    // The classifier's input: the first count(set) of as_vector().
+    static constexpr int count(GestureFeatureSet set) {
+        return set == GestureFeatureSet::kBook       ? kBookCount
+               : set == GestureFeatureSet::kExtended ? kExtendedCount
+                                                     : kTopologyCount;
     }
-    std::array<float, kExtendedCount> as_vector() const;
+    std::array<float, kTopologyCount> as_vector() const;
 };
 
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,

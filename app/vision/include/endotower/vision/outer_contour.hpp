@@ -8,7 +8,11 @@
 //              zero border); returns the one of at least 3 vertices with the largest
 //              |area| (equal areas: the last in raster order), empty when none;
 //   hull()     the strictly convex hull of the points (no collinear or repeated
-//              vertices, the vertex set of cv::convexHull), counter-clockwise.
+//              vertices, the vertex set of cv::convexHull), counter-clockwise;
+//   holes()    once after largest(): the pixel counts of the two largest holes of its
+//              mask, background regions (4-connected, the dual of 8-connected blobs)
+//              that the picture's border cannot reach: the gaps an open jaw and a
+//              crossing tool close (cv::findContours RETR_CCOMP's inner borders).
 // reserve() sizes the buffers for masks up to width x height (the only allocation);
 // larger masks are refused (empty). No exceptions.
 #pragma once
@@ -30,10 +34,12 @@ public:
     std::span<const IntPoint> largest(const std::uint8_t* mask, int width, int height,
                                       std::size_t stride, double& area);
     std::span<const IntPoint> hull(std::span<const IntPoint> points);
+    void holes(int& largest, int& second);
 
 private:
     int width_ = 0, height_ = 0;
-    std::vector<std::int8_t> image_;  // bordered copy: 0 background, 1 blob, 2 done
+    int last_width_ = 0, last_height_ = 0;  // the last largest() mask's size
+    std::vector<std::int8_t> image_;  // bordered copy: 0 background, 1 blob, 2 done, 3 reached
     std::vector<std::int32_t> stack_;
     std::vector<IntPoint> contour_, best_, sorted_, hull_;
 };
