@@ -24,7 +24,7 @@ void ContourTracer::reserve(int width, int height) {
     height_ = std::max(1, height);
     const std::size_t cells = static_cast<std::size_t>(width_ + 2) * (height_ + 2);
     image_.assign(cells, 0);
-    stack_.reserve(cells);
+    stack_.reserve(2 * cells);  // holes(): a run's first cell, from the row above and below
     // A border visits each pixel at most four times (once per side).
     for (auto* v : {&contour_, &best_, &sorted_, &hull_}) v->reserve(4 * cells + 8);
 }
@@ -106,26 +106,36 @@ std::span<const IntPoint> ContourTracer::largest(const std::uint8_t* mask, int w
 void ContourTracer::holes(int& largest, int& second) {
     largest = second = 0;
     if (last_width_ <= 0) return;
-    const int s = last_width_ + 2, n = s * (last_height_ + 2);
+    const int s = last_width_ + 2, rows = last_height_ + 2;
     std::int8_t* img = image_.data();
-    // 4-connected background fill from `seed` (marking it 3); returns its pixel count.
+    // 4-connected background fill from `seed` (marking it 3), a row run at a time (the
+    // stack holds the runs' first cells, not every pixel); returns its pixel count.
     auto fill = [&](int seed) {
         int count = 0;
         stack_.clear();
         stack_.push_back(seed);
-        img[seed] = 3;
         while (!stack_.empty()) {
             const int i = stack_.back();
             stack_.pop_back();
-            ++count;
-            for (const int d : {1, -1, s, -s}) {
-                const int j = i + d;
-                if (j >= 0 && j < n && img[j] == 0) img[j] = 3, stack_.push_back(j);
+            if (img[i] != 0) continue;  // pushed twice, filled since
+            const int y = i / s, row = y * s;
+            int l = i, r = i;
+            while (l > row && img[l - 1] == 0) --l;
+            while (r < row + s - 1 && img[r + 1] == 0) ++r;
+            std::fill(img + l, img + r + 1, std::int8_t{3});
+            count += r - l + 1;
+            for (const int dy : {-1, 1}) {
+                if (y + dy < 0 || y + dy >= rows) continue;
+                const int o = dy * s;
+                for (int j = l; j <= r; ++j)
+                    if (img[j + o] == 0 && (j == l || img[j + o - 1] != 0))
+                        stack_.push_back(j + o);
             }
         }
         return count;
     };
     fill(0);  // the zero border: everything outside
+    const int n = s * rows;
     for (int i = 0; i < n; ++i)
         if (img[i] == 0) {
             const int a = fill(i);
