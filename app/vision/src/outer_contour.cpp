@@ -128,8 +128,7 @@ void ContourTracer::holes(int& largest, int& second) {
                 if (y + dy < 0 || y + dy >= rows) continue;
                 const int o = dy * s;
                 for (int j = l; j <= r; ++j)
-                    if (img[j + o] == 0 && (j == l || img[j + o - 1] != 0))
-                        stack_.push_back(j + o);
+                    if (img[j + o] == 0 && (j == l || img[j + o - 1] != 0)) stack_.push_back(j + o);
             }
         }
         return count;
