@@ -26,6 +26,15 @@ struct Mask {
     GestureFeatures measure() const { return measure_gesture_features(px.data(), w, h, w); }
 };
 
+// Two parallel jaws (x 20-80, rows 30-39 and 61-70) joined at their left end: a U.
+Mask jaws_joined() {
+    Mask u(100, 100);
+    u.rect(20, 30, 80, 39);
+    u.rect(20, 61, 80, 70);
+    u.rect(20, 30, 29, 70);
+    return u;
+}
+
 }  // namespace
 
 TEST(GestureFeatures, RectangleHasExactValues) {
@@ -79,11 +88,7 @@ TEST(GestureFeatures, OpenJawsCountFourChangesAndAConcaveBlobIsRough) {
     EXPECT_EQ(f.max_changes, 4);
     EXPECT_EQ(f.min_changes, 0);
     // A U: the two jaws joined at one end; perimeter longer than its hull's.
-    Mask u(100, 100);
-    u.rect(20, 30, 80, 39);
-    u.rect(20, 61, 80, 70);
-    u.rect(20, 30, 29, 70);
-    const GestureFeatures g = u.measure();
+    const GestureFeatures g = jaws_joined().measure();
     EXPECT_GT(g.roughness, 1.3);
     EXPECT_LT(g.solidity, 0.7);
     EXPECT_FALSE(Mask(10, 10).measure().valid);
@@ -91,10 +96,7 @@ TEST(GestureFeatures, OpenJawsCountFourChangesAndAConcaveBlobIsRough) {
 
 TEST(GestureFeatures, HolesAreTheGapsAJawAndACrossingToolClose) {
     // The U of two jaws alone leaves no hole (its gap is open to the outside) ...
-    Mask u(100, 100);
-    u.rect(20, 30, 80, 39);
-    u.rect(20, 61, 80, 70);
-    u.rect(20, 30, 29, 70);
+    Mask u = jaws_joined();
     const GestureFeatures open = u.measure();
     EXPECT_EQ(open.hole1, 0.0);
     EXPECT_EQ(open.hole2, 0.0);
