@@ -27,6 +27,7 @@ void print_help() {
         "output\n"
         "                     of 'endotower scene', or a hand-labelled clip in that layout)\n"
         "  --test DIR         held-out recording: prints the per-gesture accuracy on its tips\n"
+        "                     and the wrong calls (truth->call count; none = no gesture)\n"
         "  --features F       book: the six features, 6-20-7 (the book's baseline);\n"
         "                     extended: nine and a 'not a tool' class, 9-20-8;\n"
         "                     topology: those nine and the two largest holes, 11-20-8\n"
