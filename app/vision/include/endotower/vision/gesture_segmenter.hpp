@@ -20,7 +20,7 @@
 //     when two tools cross and meet the rim twice); the shaft radius r: the largest
 //     distance-transform value near the entry; the tip window: the region's pixels
 //     within `window_radii` (8) x r of the tip (jaws and a little shaft), on which
-//     the six features are measured (GestureFeatures).
+//     the features are measured (GestureFeatures: the book's six, the extras, the holes).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
 // allocated in configure(); own code (BlockMean, MaskOps, ContourTracer) gives the bytes
