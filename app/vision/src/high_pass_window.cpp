@@ -4,15 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "reflect_border.hpp"
+
 namespace endotower::vision::detail {
 
 namespace {
-
-int reflect101(int i, int n) {
-    if (n == 1) return 0;
-    while (i < 0 || i >= n) i = i < 0 ? -i : 2 * n - 2 - i;
-    return i;
-}
 
 // (R 4899 + G 9617 + B 1868 + 2^13) >> 14, OpenCV's 8-bit grey; channel offsets as
 // template arguments so the loop vectorises.

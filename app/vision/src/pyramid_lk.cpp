@@ -7,6 +7,8 @@
 #include <cfloat>
 #include <cmath>
 
+#include "reflect_border.hpp"
+
 namespace endotower::vision::detail {
 
 namespace {
@@ -17,12 +19,6 @@ constexpr int kMaxWindow = 15;
 constexpr int kCols = 16;
 constexpr int kPatch = kCols + 2;  // a row of the window and a pixel each side (Scharr)
 static_assert(LkPyramid::kBorder >= kPatch, "the border must hold a padded window row");
-
-int reflect101(int i, int n) {
-    if (n == 1) return 0;
-    while (i < 0 || i >= n) i = i < 0 ? -i : 2 * n - 2 - i;
-    return i;
-}
 
 }  // namespace
 
