@@ -139,10 +139,6 @@ namespace {
 
 constexpr int kSingleToolLabels = 4;  // open/closed grasper, open/closed scissors
 
-constexpr bool two_tool_gesture(int label) {
-    return label >= kSingleToolLabels && label < kGestureLabelCount;  // cross, triangles
-}
-
 }  // namespace
 
 GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f,

@@ -49,8 +49,11 @@ void GestureStage::process(app::AnalysisContext& ctx) {
     for (std::size_t i = 0; i < n; ++i) {
         results[i] = classifier_.classify(blobs_[i].features, blobs_[i].entries);
         // A tip window that no arm leaves holds the whole region, not jaws: a thick tool
-        // near the scope widened it past the picture (docs/gestures.md, "No arm").
-        if (results[i].confidence < params_.min_confidence || blobs_[i].arms == 0)
+        // near the scope widened it past the picture (docs/gestures.md, "No arm"). Two
+        // tools whose jaws cross leave the window as two shafts; one arm is a tool
+        // resting against the other, not a two-tool gesture ("One arm").
+        if (results[i].confidence < params_.min_confidence || blobs_[i].arms == 0 ||
+            (two_tool_gesture(results[i].label) && blobs_[i].arms < 2))
             results[i].label = -1;
     }
     // One region with a gesture: it is the frame's; two: two single-tool calls.

@@ -133,9 +133,9 @@ TEST_P(T65AnchoredImage, CornersFollowTheTruth) {
     ASSERT_EQ(trace.size(), truth.size());
     double sum = 0;
     for (std::size_t f = 0; f < trace.size(); ++f) {
-        const auto& a = trace[f]["anchored"].at(0);
-        ASSERT_EQ(a["kind"], "image");
-        ASSERT_TRUE(a["shown"].get<bool>()) << "frame " << f;
+        const auto& a = trace[f].at("anchored").at(0);
+        ASSERT_EQ(a.at("kind"), "image");
+        ASSERT_TRUE(a.at("shown").get<bool>()) << "frame " << f;
         const auto& tr = truth[f]["regions"][0];
         const auto h = tr["H_from_first"].get<std::vector<double>>();
         double area = 0;
@@ -190,7 +190,7 @@ TEST(RegionsCommand, AnchoredOverlayInput) {
     EXPECT_NE(r.output.find("missing.png"), std::string::npos) << r.output;
     const auto lines = read_lines(dir / "t.jsonl");
     ASSERT_EQ(lines.size(), 2u);
-    EXPECT_FALSE(lines[1]["anchored"][0]["shown"].get<bool>());
+    EXPECT_FALSE(lines[1].at("anchored").at(0).at("shown").get<bool>());
     // An object without a calibration: the message instead, the video goes on.
     r = run(sim + quote(poly + " overlay=object:cube"));
     EXPECT_EQ(r.status, 0) << r.output;
@@ -226,7 +226,7 @@ TEST(RegionsCommand, ImagePairOfDifferentSizes) {
     ASSERT_EQ(sim.status, 0) << sim.output;
     const auto lines = read_lines(dir / "trace.jsonl");
     ASSERT_EQ(lines.size(), 2u);
-    EXPECT_EQ(lines[1]["regions"][0]["state"], "tracked");
+    EXPECT_EQ(lines[1].at("regions").at(0).at("state"), "tracked");
     const CommandRun eval =
         run("eval --trace " + (dir / "trace.jsonl").string() + " --homography " +
             (dir / "h.txt").string() + " --region " + quote(region) + " --max-corner-error 1");
@@ -252,13 +252,14 @@ TEST(RegionsCommand, TimelineMarksARegionAtItsFrame) {
     const auto lines = read_lines(dir / "trace.jsonl");
     ASSERT_EQ(lines.size(), 5u);
     EXPECT_FALSE(lines[1].contains("regions"));
-    ASSERT_EQ(lines[2]["regions"].size(), 1u);
-    EXPECT_EQ(lines[2]["regions"][0]["id"], 0);
-    EXPECT_EQ(lines[2]["regions"][0]["polygon_px"][2][0], 300.0);
-    ASSERT_EQ(lines[4]["regions"].size(), 2u);
-    EXPECT_EQ(lines[4]["regions"][1]["id"], 1);
-    EXPECT_EQ(lines[4]["regions"][1]["state"], "tracked");
-    EXPECT_NEAR(lines[4]["regions"][1]["polygon_px"][1][0].get<double>(), 560.0, 0.5);
+    ASSERT_EQ(lines[2].at("regions").size(), 1u);
+    EXPECT_EQ(lines[2].at("regions").at(0).at("id"), 0);
+    EXPECT_EQ(lines[2].at("regions").at(0).at("polygon_px").at(2).at(0), 300.0);
+    ASSERT_EQ(lines[4].at("regions").size(), 2u);
+    EXPECT_EQ(lines[4].at("regions").at(1).at("id"), 1);
+    EXPECT_EQ(lines[4].at("regions").at(1).at("state"), "tracked");
+    EXPECT_NEAR(lines[4].at("regions").at(1).at("polygon_px").at(1).at(0).get<double>(), 560.0,
+                0.5);
     fs::remove_all(dir);
 }
 

@@ -6,7 +6,9 @@
 // calls (fig. 3.21) and the frame's label is null (each tool's own is listed).
 // A label below `min_confidence` (0.5) counts as none; so does a region whose tip
 // window no arm leaves (GestureBlob::arms 0: the window holds the whole region, so its
-// shape is not the jaws'; two tools at rest against each other read as a cross).
+// shape is not the jaws'; two tools at rest against each other read as a cross), and a
+// two-tool gesture (cross, triangle, double triangle) in a window only one arm leaves
+// (crossing jaws leave it as two shafts; one is a tool resting against the other).
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
 // the hold began; moving starts a new hold. Another label (or none) for at most
