@@ -54,7 +54,9 @@ inline constexpr std::array<const char*, kGestureLabelCount> kGestureLabels = {
     "cross",        "triangle",       "double_triangle"};
 int gesture_label_index(const std::string& label);  // -1 if not one of kGestureLabels
 // Cross, triangle, double triangle: the gestures made with two tools.
-constexpr bool two_tool_gesture(int label) { return label >= 4 && label < kGestureLabelCount; }
+constexpr bool two_tool_gesture(int label) {
+    return label >= 4 && label < kGestureLabelCount;
+}
 
 struct GestureTrainParams {
     GestureFeatureSet features = GestureFeatureSet::kBook;
