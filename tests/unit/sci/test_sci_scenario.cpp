@@ -146,6 +146,44 @@ TEST(SciScenario, ScissorsHeldInTheActivationAreaActivateAfterThreeSeconds) {
     fs::remove_all(dir);
 }
 
+// No gesture meant (docs/gestures.md "One arm"): board/sim/scenarios/sci/tools_resting.yaml,
+// the 10 mm grasper resting its closed tip on the scissors' closed jaws, both still for
+// 2.4 s (the pose of surgery_motion seed 39, where the SCI opened the quadrant menu). Its
+// tip window reads as a cross, but a two-tool gesture needs two arms: no gesture fires as
+// a cross and the SCI stays inactive, no event at all. Without the rule the quadrant
+// menu opens on frame 25, 1 s after the first cross.
+TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
+    const fs::path dir = temp_dir("resting");
+    const std::string src = ENDOTOWER_SOURCE_DIR;
+    auto scene = run_endotower("scene --scenario " + src +
+                               "/board/sim/scenarios/sci/tools_resting.yaml --out " +
+                               (dir / "scene").string());
+    ASSERT_EQ(scene.status, 0) << scene.output;
+    std::ofstream(dir / "board.yaml")
+        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
+        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
+        << "/board/sim/models/gestures.yml\nsci:\n  layout: three_level\n  media: " << src
+        << "/board/sim/sci_media\n";
+    auto sim =
+        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
+                      (dir / "scene/frames").string() + " --events '' --out " +
+                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
+    ASSERT_EQ(sim.status, 0) << sim.output;
+    std::ifstream in(dir / "trace.jsonl");
+    int frames = 0;
+    for (std::string line; std::getline(in, line); ++frames) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        const nlohmann::json& s = j.at("sci");
+        EXPECT_EQ(text(s.at("state")), "inactive") << "frame " << frames;
+        EXPECT_EQ(text(s.at("event")), "-") << "frame " << frames;
+        const nlohmann::json& g = j.at("gesture");
+        EXPECT_FALSE(g.at("fired").get<bool>() && text(g.at("label")) == "cross")
+            << "frame " << frames;
+    }
+    EXPECT_EQ(frames, 60);
+    fs::remove_all(dir);
+}
+
 TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
     const fs::path dir = temp_dir("board");
     std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";
