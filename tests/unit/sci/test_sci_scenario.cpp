@@ -43,6 +43,27 @@ std::string text(const nlohmann::json& v) {
     return v.is_null() ? "-" : v.get<std::string>();
 }
 
+// Renders a scenario of board/sim/scenarios/sci (NAME plus scene options) into dir/scene
+// and replays it with the likelihood tracker, the shipped gesture model and the
+// three-level SCI, no handle events, tracing to dir/trace.jsonl. Empty when both ran,
+// else the failing command's output.
+std::string replay_with_gestures(const fs::path& dir, const std::string& scenario) {
+    const std::string src = ENDOTOWER_SOURCE_DIR;
+    auto scene = run_endotower("scene --scenario " + src + "/board/sim/scenarios/sci/" + scenario +
+                               " --out " + (dir / "scene").string());
+    if (scene.status != 0) return scene.output;
+    std::ofstream(dir / "board.yaml")
+        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
+        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
+        << "/board/sim/models/gestures.yml\nsci:\n  layout: three_level\n  media: " << src
+        << "/board/sim/sci_media\n";
+    auto sim =
+        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
+                      (dir / "scene/frames").string() + " --events '' --out " +
+                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
+    return sim.status == 0 ? std::string() : sim.output;
+}
+
 TEST(SciScenario, RingMenuExactSequence) {
     const fs::path dir = temp_dir("ring");
     const std::string src = ENDOTOWER_SOURCE_DIR;
@@ -110,22 +131,8 @@ TEST(SciScenario, RingMenuExactSequence) {
 // the activation_start frame (the scissors' first still frame, 19 or 20) + 75 or 76.
 TEST(SciScenario, ScissorsHeldInTheActivationAreaActivateAfterThreeSeconds) {
     const fs::path dir = temp_dir("activation");
-    const std::string src = ENDOTOWER_SOURCE_DIR;
-    auto scene = run_endotower("scene --scenario " + src +
-                               "/board/sim/scenarios/sci/scissors_activation.yaml --frames 100 "
-                               "--out " +
-                               (dir / "scene").string());
-    ASSERT_EQ(scene.status, 0) << scene.output;
-    std::ofstream(dir / "board.yaml")
-        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
-        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
-        << "/board/sim/models/gestures.yml\nsci:\n  layout: three_level\n  media: " << src
-        << "/board/sim/sci_media\n";
-    auto sim =
-        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
-                      (dir / "scene/frames").string() + " --events '' --out " +
-                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
-    ASSERT_EQ(sim.status, 0) << sim.output;
+    const std::string failed = replay_with_gestures(dir, "scissors_activation.yaml --frames 100");
+    ASSERT_TRUE(failed.empty()) << failed;
     std::vector<Step> events;
     std::ifstream in(dir / "trace.jsonl");
     for (std::string line; std::getline(in, line);) {
@@ -154,21 +161,8 @@ TEST(SciScenario, ScissorsHeldInTheActivationAreaActivateAfterThreeSeconds) {
 // menu opens on frame 25, 1 s after the first cross.
 TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
     const fs::path dir = temp_dir("resting");
-    const std::string src = ENDOTOWER_SOURCE_DIR;
-    auto scene = run_endotower("scene --scenario " + src +
-                               "/board/sim/scenarios/sci/tools_resting.yaml --out " +
-                               (dir / "scene").string());
-    ASSERT_EQ(scene.status, 0) << scene.output;
-    std::ofstream(dir / "board.yaml")
-        << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
-        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
-        << "/board/sim/models/gestures.yml\nsci:\n  layout: three_level\n  media: " << src
-        << "/board/sim/sci_media\n";
-    auto sim =
-        run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
-                      (dir / "scene/frames").string() + " --events '' --out " +
-                      (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
-    ASSERT_EQ(sim.status, 0) << sim.output;
+    const std::string failed = replay_with_gestures(dir, "tools_resting.yaml");
+    ASSERT_TRUE(failed.empty()) << failed;
     std::ifstream in(dir / "trace.jsonl");
     int frames = 0;
     for (std::string line; std::getline(in, line); ++frames) {
