@@ -3,8 +3,8 @@
 # suite, TSan the multi-threaded test programs (CI) or the whole suite.
 #   ./toolchain/sanitize.sh asan       # AddressSanitizer + UndefinedBehaviorSanitizer
 #   ./toolchain/sanitize.sh tsan       # ThreadSanitizer, the multi-threaded programs (CI)
-#   ./toolchain/sanitize.sh tsan-all   # ThreadSanitizer, the whole suite (about 45 min
-#                                      # on 2 cores: not in CI, docs/reliability.md)
+#   ./toolchain/sanitize.sh tsan-all   # ThreadSanitizer, the whole suite (31 min of tests
+#                                      # on 2 cores plus the build: not in CI)
 # Any report fails the run: ASan/UBSan abort on the first error (the preset builds
 # with -fno-sanitize-recover=undefined), TSan exits non-zero (halt_on_error).
 # The qemu tests (label "driver") are left out: the guest boots a kernel of its own and
@@ -34,8 +34,8 @@ if [ "$mode" != tsan ]; then
 else
   # TSan: the test programs whose code runs on several threads (the pipeline's video
   # and analysis threads, capture and input sources, the fault matrix). The whole
-  # suite under TSan (tsan-all) is not part of CI: about 45 min on two cores
-  # (docs/reliability.md).
+  # suite under TSan (tsan-all) is not part of CI: 31 min of tests on two cores plus a
+  # cold build (docs/reliability.md).
   # Also the undistorter's helper thread (set_threads(2)): its tests only, the rest of
   # test_calibration is single-threaded fitting.
   targets=(test_app test_sim test_reliability test_calibration)

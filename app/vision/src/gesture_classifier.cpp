@@ -135,12 +135,6 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
     return true;
 }
 
-namespace {
-
-constexpr int kSingleToolLabels = 4;  // open/closed grasper, open/closed scissors
-
-}  // namespace
-
 GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f,
                                      bool one_tool) const {
     GestureResult r;

@@ -18,14 +18,6 @@
 namespace endotower::calibration::test {
 namespace {
 
-#if defined(__SANITIZE_THREAD__)
-// Under TSan (toolchain/sanitize.sh runs the Undistorter tests): OpenCV's parallel_for_
-// (the scene renderer that draws the test frames) runs on TBB, which is not
-// instrumented, so its hand-over of the rows and its join look like races. OpenCV runs
-// on the calling thread here; the undistorter's own helper thread is what is checked.
-const bool kOpenCvOnTheCallingThread = (cv::setNumThreads(1), true);
-#endif
-
 Calibration sample() {
     Calibration c;
     c.scope = "olympus-wa53000a";

@@ -53,9 +53,11 @@ inline constexpr std::array<const char*, kGestureLabelCount> kGestureLabels = {
     "open_grasper", "closed_grasper", "open_scissors",  "closed_scissors",
     "cross",        "triangle",       "double_triangle"};
 int gesture_label_index(const std::string& label);  // -1 if not one of kGestureLabels
-// Cross, triangle, double triangle: the gestures made with two tools.
+// The first four labels are one tool's (open/closed grasper, open/closed scissors); cross,
+// triangle, double triangle are made with two.
+constexpr int kSingleToolLabels = 4;
 constexpr bool two_tool_gesture(int label) {
-    return label >= 4 && label < kGestureLabelCount;
+    return label >= kSingleToolLabels && label < kGestureLabelCount;
 }
 
 struct GestureTrainParams {
