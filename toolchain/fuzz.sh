@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (preset "fuzz", clang) and runs each for SECONDS
 # (default 60) on a copy of its committed corpus. A crash stops with its input saved
-# as build/fuzz/crash-*; add it to tests/fuzz/corpus/NAME and fix the parser.
+# as build/fuzz/crash-*; add it to tests/fuzz/corpus/NAME and fix the parser. One input
+# running past 20 s fails the same way (build/fuzz/timeout-*): a hang must not eat CI's
+# time (a gesture model without weights and with a huge hidden layer once ran for half an hour).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-60}
@@ -13,7 +15,7 @@ for t in $(ls tests/fuzz/corpus); do  # one corpus folder per target fuzz_NAME
   work="build/fuzz/corpus-$t"
   rm -rf "$work" && mkdir -p "$work" && cp tests/fuzz/corpus/$t/* "$work/"
   echo "fuzz_$t: ${seconds} s"
-  "build/fuzz/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -max_len=70000 \
+  "build/fuzz/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=20 -max_len=70000 \
     -artifact_prefix="build/fuzz/" -print_final_stats=1 "$work" 2>&1 | grep -E "^(stat::number_of_executed_units|Done|==.*ERROR|SUMMARY)" || true
   test "${PIPESTATUS[0]}" -eq 0
 done

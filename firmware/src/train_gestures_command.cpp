@@ -102,8 +102,9 @@ int run_train_gestures_command(const Args& args) {
             if (!whole(v, 1, 100000, every))
                 return usage_error("--every needs a whole number >= 1, got '" + v + "'");
         } else if (k == "--hidden") {
-            if (!whole(v, 1, 1000, hidden))
-                return usage_error("--hidden needs a whole number in 1..1000, got '" + v + "'");
+            if (!whole(v, 2, vision::kGestureMaxHidden, hidden))
+                return usage_error("--hidden needs a whole number in 2.." +
+                                   std::to_string(vision::kGestureMaxHidden) + ", got '" + v + "'");
         } else if (k == "--networks") {
             if (v != "one" && v != "two")
                 return usage_error("--networks: expected one or two, got '" + v + "'");

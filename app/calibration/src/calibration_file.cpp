@@ -1,6 +1,7 @@
 #include "endotower/calibration/calibration_file.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,10 @@ namespace endotower::calibration {
 using nlohmann::json;
 
 namespace {
+
+// Past any endoscope's sensor; also keeps every size and radius the checks below loop
+// over or multiply small (a hostile file must not make the parser run for minutes).
+constexpr int kMaxImageSide = 16384;
 
 struct Reader {
     const json& doc;
@@ -80,6 +85,11 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
             1 + std::count(text.begin(), text.begin() + static_cast<long>(upto), '\n');
         error = source + ":" + std::to_string(line) + ": not valid JSON";
         return false;
+    } catch (const json::exception&) {
+        // The parser reports a number too large for a double (1e999) as out_of_range,
+        // without a position (found by fuzz_calibration: it used to end the program).
+        error = source + ": not valid JSON (a number out of range)";
+        return false;
     }
     Reader r{doc, source, error};
     if (!doc.is_object()) return r.fail("not a JSON object");
@@ -94,19 +104,33 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
         return r.fail("missing field 'scope' (the scope's name or serial)");
     c.scope = scope->get<std::string>();
     const auto size = doc.find("image_size");
-    if (size == doc.end() || !size->is_array() || size->size() != 2 ||
-        !(*size)[0].is_number_integer() || !(*size)[1].is_number_integer() ||
-        (*size)[0].get<int>() <= 0 || (*size)[1].get<int>() <= 0)
-        return r.fail("'image_size' must be [width, height], positive integers");
-    c.width = (*size)[0].get<int>();
-    c.height = (*size)[1].get<int>();
+    // A side as a whole number in 1..kMaxImageSide, else 0 (JSON keeps non-negative
+    // integers unsigned; nothing here narrows a huge one into range).
+    auto side = [&](std::size_t i) -> int {
+        const json& v = (*size)[i];
+        if (!v.is_number_integer()) return 0;
+        if (v.is_number_unsigned()) {
+            const std::uint64_t u = v.get<std::uint64_t>();
+            return u >= 1 && u <= static_cast<std::uint64_t>(kMaxImageSide) ? static_cast<int>(u)
+                                                                            : 0;
+        }
+        const std::int64_t n = v.get<std::int64_t>();
+        return n >= 1 && n <= kMaxImageSide ? static_cast<int>(n) : 0;
+    };
+    if (size == doc.end() || !size->is_array() || size->size() != 2 || side(0) == 0 || side(1) == 0)
+        return r.fail("'image_size' must be [width, height], whole numbers 1.." +
+                      std::to_string(kMaxImageSide));
+    c.width = side(0);
+    c.height = side(1);
+    auto inside = [&](double x, double y) {
+        return x >= 0 && x < c.width && y >= 0 && y < c.height;
+    };
     if (!r.number(doc, "fx", c.fx, "", true) || !r.number(doc, "fy", c.fy, "", true) ||
         !r.number(doc, "cx", c.cx, "", false) || !r.number(doc, "cy", c.cy, "", false) ||
         !r.number(doc, "rms", c.rms, "", false) || !r.numbers(doc, "distortion", c.distortion, ""))
         return false;
     if (c.rms < 0) return r.fail("'rms' must not be negative");
-    if (c.cx < 0 || c.cx >= c.width || c.cy < 0 || c.cy >= c.height)
-        return r.fail("the centre (cx, cy) lies outside the image");
+    if (!inside(c.cx, c.cy)) return r.fail("the centre (cx, cy) lies outside the image");
     const std::size_t nd = c.distortion.size();
     if (c.model == LensModel::kPinhole && nd != 4 && nd != 5 && nd != 8 && nd != 12 && nd != 14)
         return r.fail("'distortion' has " + std::to_string(nd) +
@@ -124,6 +148,11 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
             !r.number(*f, "cy", c.fov.cy, "fov.", false) ||
             !r.number(*f, "radius", c.fov.radius, "fov.", true))
             return false;
+        if (!inside(c.fov.cx, c.fov.cy)) return r.fail("the 'fov' centre lies outside the image");
+        const double diagonal = std::hypot(c.width, c.height);
+        if (c.fov.radius > diagonal)
+            return r.fail("'fov.radius' is larger than the image's diagonal (" +
+                          std::to_string(static_cast<int>(diagonal)) + " px)");
     }
     if (const auto b = doc.find("book_polynomial"); b != doc.end()) {
         if (!b->is_object()) return r.fail("'book_polynomial' must be an object {cx, cy, k}");
@@ -133,6 +162,8 @@ bool parse_calibration(const std::string& text, const std::string& source, Calib
             !r.numbers(*b, "k", p.k, "book_polynomial."))
             return false;
         if (p.k.empty() || p.k.size() > 5) return r.fail("'book_polynomial.k' needs 1..5 values");
+        if (!inside(p.cx, p.cy))
+            return r.fail("the 'book_polynomial' centre lies outside the image");
         const double lim = c.fov.valid() ? c.fov.radius : r_max;
         if (!p.monotonic(lim))
             return r.fail("'book_polynomial' is not monotonic within " +

@@ -31,8 +31,11 @@ bool RadialPolynomial::corrected_radius(double rd, double& r) const {
 }
 
 bool RadialPolynomial::monotonic(double r_max) const {
+    if (!std::isfinite(r_max)) return false;
     double prev = distorted_radius(0);
-    const int steps = std::max(100, static_cast<int>(r_max));
+    // One step per pixel of radius, at least 100; capped so that no radius makes it loop
+    // for long (the calibration file bounds the image to 16384 px a side: 23170 px).
+    const int steps = static_cast<int>(std::clamp(r_max, 100.0, 32768.0));
     for (int i = 1; i <= steps; ++i) {
         const double v = distorted_radius(r_max * i / steps);
         if (!(v > prev)) return false;

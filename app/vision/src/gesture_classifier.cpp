@@ -32,6 +32,41 @@ const char* segmentation_name(GestureSegmentation s) {
     return s == GestureSegmentation::kMorphology ? "morphology" : "likelihood";
 }
 
+// OpenCV's ANN_MLP::read trusts the file: it sizes the weights from layer_sizes and
+// reads as many numbers as each list holds, leaving the rest uninitialised. So the
+// shape is checked first: nf-h-classes layers, 2 to kGestureMaxHidden hidden neurons
+// (what the trainer accepts), and every list exactly as long as the layers make it.
+// Returns what is wrong, or "" when the node is nf-h-classes throughout.
+std::string network_shape_error(const cv::FileNode& net, int nf, int classes) {
+    const cv::FileNode sizes = net["layer_sizes"];
+    if (!sizes.isSeq() || sizes.size() != 3 || !sizes[0].isInt() || !sizes[1].isInt() ||
+        !sizes[2].isInt())
+        return "layer_sizes is not a list of three integers";
+    const int in = static_cast<int>(sizes[0]), hidden = static_cast<int>(sizes[1]),
+              out = static_cast<int>(sizes[2]);
+    if (in != nf || out != classes || hidden < 2 || hidden > kGestureMaxHidden)
+        return "layer_sizes is " + std::to_string(in) + "-" + std::to_string(hidden) + "-" +
+               std::to_string(out);
+    const std::pair<const char*, std::size_t> lists[] = {
+        {"input_scale", 2 * static_cast<std::size_t>(nf)},
+        {"output_scale", 2 * static_cast<std::size_t>(classes)},
+        {"inv_output_scale", 2 * static_cast<std::size_t>(classes)}};
+    auto wrong_length = [](const cv::FileNode& n, std::size_t want) {
+        return !n.isSeq() || n.size() != want;
+    };
+    for (const auto& [key, want] : lists)
+        if (wrong_length(net[key], want))
+            return std::string(key) + " does not hold " + std::to_string(want) + " numbers";
+    const cv::FileNode w = net["weights"];
+    if (wrong_length(w, 2) ||
+        wrong_length(w[0], static_cast<std::size_t>(nf + 1) * static_cast<std::size_t>(hidden)) ||
+        wrong_length(w[1],
+                     static_cast<std::size_t>(hidden + 1) * static_cast<std::size_t>(classes)))
+        return "the weights are not two lists of " + std::to_string((nf + 1) * hidden) + " and " +
+               std::to_string((hidden + 1) * classes) + " numbers";
+    return {};
+}
+
 }  // namespace
 
 int gesture_label_index(const std::string& label) {
@@ -243,27 +278,29 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
             bytes.substr(net_at, body_size - net_at),
             cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
         if (!fs.isOpened() || fs[kNode].empty()) return fail("no network in the file");
+        const std::string shape = " is not " + std::to_string(nf) + "-N-" +
+                                  std::to_string(classes) +
+                                  " (2 <= N <= " + std::to_string(kGestureMaxHidden) +
+                                  ") for the '" + features + "' features: ";
+        if (const std::string why = network_shape_error(fs[kNode], nf, classes); !why.empty())
+            return fail("the network" + shape + why);
         ann = cv::ml::ANN_MLP::create();
         ann->read(fs[kNode]);
         if (!fs[kTwoToolNode].empty()) {
             if (fs_set == GestureFeatureSet::kBook)
                 return fail(
                     "a two-tool network with the book's features (extended or topology only)");
+            if (const std::string why = network_shape_error(fs[kTwoToolNode], nf, classes);
+                !why.empty())
+                return fail("the two-tool network" + shape + why);
             two = cv::ml::ANN_MLP::create();
             two->read(fs[kTwoToolNode]);
         }
     } catch (const cv::Exception& e) {
         return fail("unreadable network (" + e.msg + ")");
     }
-    for (const cv::Ptr<cv::ml::ANN_MLP>& n : {ann, two}) {
-        if (n.empty()) continue;
-        const cv::Mat sizes = n->getLayerSizes();
-        if (sizes.total() != 3 || sizes.type() != CV_32S || sizes.at<int>(0) != nf ||
-            sizes.at<int>(1) < 1 || sizes.at<int>(2) != classes || !n->isTrained())
-            return fail(std::string(n == two ? "the two-tool network" : "the network") +
-                        " is not " + std::to_string(nf) + "-N-" + std::to_string(classes) +
-                        " for the '" + features + "' features");
-    }
+    if (!ann->isTrained() || (!two.empty() && !two->isTrained()))
+        return fail("unreadable network (OpenCV did not load it)");
     net_->ann = ann;
     net_->two_tool = two;
     features_ = fs_set;

@@ -76,6 +76,21 @@ TEST(CalibrationFile, ValidationNamesTheProblem) {
         {with("1.575e-06", "0.0001"), "'book_polynomial' is not monotonic"},
         {with("50.0,\n      40.0", "50.0,\n      52.0"), "separation must fall"},
         {with("\"fx\": 649.5,", "\"fx\": 649.5,,"), "scope.json:2: not valid JSON"},
+        // Sizes and radii a parser would loop over or narrow (found by fuzz_calibration).
+        {with("\"fx\": 649.5", "\"fx\": 1e999"),
+         "scope.json: not valid JSON (a number out of range)"},
+        {with("768,", "16385,"), "'image_size' must be [width, height], whole numbers 1..16384"},
+        {with("768,", "18446744073709551615,"), "whole numbers 1..16384"},
+        {with("768,", "-768,"), "whole numbers 1..16384"},
+        {with("768,", "768.0,"), "whole numbers 1..16384"},
+        {with("\"radius\": 340.0", "\"radius\": 1e300"),
+         "'fov.radius' is larger than the image's diagonal (1045 px)"},
+        {with("\"cx\": 384.0,\n    \"cy\": 355.0,\n    \"radius\"",
+              "\"cx\": -5.0,\n    \"cy\": 355.0,\n    \"radius\""),
+         "the 'fov' centre lies outside the image"},
+        {with("\"cx\": 384.0,\n    \"cy\": 355.0,\n    \"k\"",
+              "\"cx\": 384.0,\n    \"cy\": 1e9,\n    \"k\""),
+         "the 'book_polynomial' centre lies outside the image"},
     };
     for (const auto& [text, what] : cases) {
         Calibration c;

@@ -263,24 +263,41 @@ TEST(GestureClassifier, CorruptOrWrongModelFilesAreRefused) {
     EXPECT_NE(error.find("not a gesture model"), std::string::npos) << error;
     EXPECT_FALSE(r.parse("", "m.yml", error));
 
-    // A consistent file whose network does not fit its feature set (9 inputs, "book").
-    std::string body = good.substr(0, good.size() - 23);
-    body.replace(body.find("features extended"), 17, "features book");
-    GestureClassifier tmp;
-    // Re-sign it the way serialise() does: take a serialised empty model's tail format.
-    char tail[32];
-    std::uint64_t h = 1469598103934665603ull;
-    for (char ch : body) h = (h ^ static_cast<std::uint8_t>(ch)) * 1099511628211ull;
-    std::snprintf(tail, sizeof tail, "fnv1a %016llx\n", static_cast<unsigned long long>(h));
-    EXPECT_FALSE(r.parse(body + tail, "m.yml", error));
+    // Consistent files (re-signed the way serialise() signs) whose network is wrong.
+    const std::string good_body = good.substr(0, good.size() - 23);
+    auto signed_model = [](const std::string& body) {
+        std::uint64_t h = 1469598103934665603ull;
+        for (char ch : body) h = (h ^ static_cast<std::uint8_t>(ch)) * 1099511628211ull;
+        char tail[32];
+        std::snprintf(tail, sizeof tail, "fnv1a %016llx\n", static_cast<unsigned long long>(h));
+        return body + tail;
+    };
+    auto edited = [&](const std::string& from, const std::string& to) {
+        std::string body = good_body;
+        const std::size_t at = body.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        return signed_model(at == std::string::npos ? body : body.replace(at, from.size(), to));
+    };
+    ASSERT_TRUE(GestureClassifier().parse(signed_model(good_body), "m.yml", error)) << error;
+    // 9 inputs labelled "book" (6) and "topology" (11).
+    EXPECT_FALSE(r.parse(edited("features extended", "features book"), "m.yml", error));
     EXPECT_NE(error.find("not 6-N-7"), std::string::npos) << error;
-    // The same 9-input network labelled with the topology features (11 inputs).
-    body.replace(body.find("features book"), 13, "features topology");
-    h = 1469598103934665603ull;
-    for (char ch : body) h = (h ^ static_cast<std::uint8_t>(ch)) * 1099511628211ull;
-    std::snprintf(tail, sizeof tail, "fnv1a %016llx\n", static_cast<unsigned long long>(h));
-    EXPECT_FALSE(r.parse(body + tail, "m.yml", error));
-    EXPECT_NE(error.find("not 11-N-8 for the 'topology' features"), std::string::npos) << error;
+    EXPECT_FALSE(r.parse(edited("features extended", "features topology"), "m.yml", error));
+    EXPECT_NE(error.find("the network is not 11-N-8 (2 <= N <= 1000) for the 'topology' "
+                         "features: layer_sizes is 9-20-8"),
+              std::string::npos)
+        << error;
+    // No weights: OpenCV would load it with uninitialised weights. A hidden layer of 2e8
+    // neurons: it would allocate and run 16 GB of them (found by fuzz_gesture_model).
+    EXPECT_FALSE(r.parse(edited("   weights:", "   no_weights:"), "m.yml", error));
+    EXPECT_NE(error.find("the weights are not two lists of 200 and 168 numbers"), std::string::npos)
+        << error;
+    EXPECT_FALSE(r.parse(edited("[ 9, 20, 8 ]", "[ 9, 200000000, 8 ]"), "m.yml", error));
+    EXPECT_NE(error.find("layer_sizes is 9-200000000-8"), std::string::npos) << error;
+    EXPECT_FALSE(
+        r.parse(edited("   input_scale:\n      - ", "   input_scale:\n      - 1\n      - "),
+                "m.yml", error));
+    EXPECT_NE(error.find("input_scale does not hold 18 numbers"), std::string::npos) << error;
 
     EXPECT_FALSE(r.load("/nonexistent/gestures.yml", error));
     EXPECT_NE(error.find("/nonexistent/gestures.yml: cannot open"), std::string::npos);

@@ -28,9 +28,10 @@
 // "segmentation morphology|likelihood\n", the network as OpenCV FileStorage YAML (node
 // opencv_ml_ann_mlp; the two-tool network, when there is one, node two_tool_ann_mlp),
 // then "fnv1a " and the FNV-1a 64-bit hash of everything before it as 16 hex digits and
-// "\n". parse()/load() refuse another header, a hash mismatch, or a network that is not
-// features-hidden-classes, with a message naming the file (the network must be 6-N-7,
-// 9-N-8 or 11-N-8). serialise() gives the bytes (the caller writes them atomically).
+// "\n" (the same non-standard offset basis as tool_likelihood.hpp's). parse()/load() refuse another
+// header, a hash mismatch, or a network that is not features-hidden-classes, with a message naming
+// the file (the network must be 6-N-7, 9-N-8 or 11-N-8, 2 <= N <= kGestureMaxHidden, every list as
+// long as the layers make it). serialise() gives the bytes (the caller writes them atomically).
 // classify() is for the per-frame path: no exceptions, no allocation.
 #pragma once
 
@@ -59,6 +60,8 @@ constexpr int kSingleToolLabels = 4;
 constexpr bool two_tool_gesture(int label) {
     return label >= kSingleToolLabels && label < kGestureLabelCount;
 }
+
+constexpr int kGestureMaxHidden = 1000;  // hidden units; OpenCV needs at least 2
 
 struct GestureTrainParams {
     GestureFeatureSet features = GestureFeatureSet::kBook;

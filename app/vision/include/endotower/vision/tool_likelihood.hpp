@@ -11,9 +11,10 @@
 //
 // File (written atomically by the caller's write): "ETLIK1\n", then 65536 bytes of
 // probabilities, then the FNV-1a 64-bit hash of those bytes as 16 hex digits and
-// "\n". load() refuses any other size, header or hash with a message naming the file.
-// cell() is exact integer arithmetic, round(63 b / s) with s = b + g + r, its two
-// divisions by s done as multiplications by 2^40 / s rounded up (the same cell as the
+// "\n" (its offset basis is 1469598103934665603, a digit short of the standard one; kept
+// so the files already written stay valid). load() refuses any other size, header or hash with a
+// message naming the file. cell() is exact integer arithmetic, round(63 b / s) with s = b + g + r,
+// its two divisions by s done as multiplications by 2^40 / s rounded up (the same cell as the
 // divisions for every colour; tested on all 2^24), so probability() is cheap per pixel.
 #pragma once
 
