@@ -1,5 +1,7 @@
-// BlockMean: an odd integer-factor box reduction (block_mean.hpp).
+// BlockMean: an integer-factor box reduction (block_mean.hpp).
 #include "endotower/vision/block_mean.hpp"
+
+#include <cmath>
 
 namespace endotower::vision {
 
@@ -10,7 +12,7 @@ bool BlockMean::configure(int src_width, int src_height, int dst_width, int dst_
         return false;
     const int k = src_width / dst_width;
     // Column sums of k rows (255 k) stay in 16 bits; k <= 15 keeps the mean table small.
-    if (k % 2 == 0 || k > 15 || src_height != k * dst_height) return false;
+    if (k < 1 || k > 15 || src_height != k * dst_height) return false;
     factor_ = k;
     channels_ = channels;
     dst_width_ = dst_width;
@@ -19,8 +21,13 @@ bool BlockMean::configure(int src_width, int src_height, int dst_width, int dst_
     sums_.assign(columns_.size(), 0);
     const int area = k * k;
     mean_.resize(static_cast<std::size_t>(255) * area + 1);
+    // OpenCV's rounding of the block sum s: half up for k = 2 (its 2 x 2 path), else
+    // s times the float 1 / k^2 rounded half to even (for odd k the same as
+    // (s + k^2 / 2) / k^2: no ties).
+    const float inverse = 1.f / static_cast<float>(area);
     for (std::size_t s = 0; s < mean_.size(); ++s)
-        mean_[s] = static_cast<std::uint8_t>((s + area / 2) / area);
+        mean_[s] = static_cast<std::uint8_t>(k == 2 ? (s + 2) / 4
+                                                    : std::lrint(static_cast<float>(s) * inverse));
     return true;
 }
 

@@ -12,14 +12,14 @@ namespace endotower::vision {
 
 struct GestureSegmenter::Work {
     double scale = 1.0;
-    BlockMean reduce;  // the odd integer factors (1920 -> 640); others: cv::resize
+    BlockMean reduce;  // integer factors up to 15 (1920 -> 640); others: cv::resize
     MaskOps ops;
-    ContourTracer tracer;           // the features' contours (window <= the analysis size)
-    std::array<int, 7> fov_rows{};  // the field-of-view element's rows as half-widths
+    ContourTracer tracer;            // the features' contours (window <= the analysis size)
+    std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths
     cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels, window;
     std::vector<std::uint32_t> dist;  // chamfer distances in one region's box
     std::vector<double> reach;        // per region pixel, its distance from the entry
-    cv::Mat large_element, small_element, fov_element;
+    cv::Mat large_element, small_element;
     struct Px {
         int x, y;
     };
@@ -87,13 +87,7 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     w.large_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(big, big));
     const int s = std::max(1, params_.small_element);
     w.small_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(s, s));
-    w.fov_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(7, 7));
-    for (int r = 0; r < 7; ++r) {  // each row of the ellipse is centred on column 3
-        const std::uint8_t* e = w.fov_element.ptr<std::uint8_t>(r);
-        int first = 0;
-        while (first < 7 && e[first] == 0) ++first;
-        w.fov_rows[r] = first < 7 ? 3 - first : -1;
-    }
+    MaskOps::ellipse_rows(3, w.fov_rows);  // 7x7
     // Every list at its largest possible size: no reallocation per frame, whatever the mask.
     const auto area = static_cast<std::size_t>(sw) * sh;
     w.pixels.reserve(area);
@@ -151,7 +145,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     const LitMoments fov = w.ops.lit_field(plane(w.gray), lit_threshold, plane(w.lit));
     if (fov.m00 <= 0) return 0;
     const double fcx = fov.m10 / fov.m00, fcy = fov.m01 / fov.m00, fr = std::sqrt(fov.m00 / M_PI);
-    w.ops.morph(plane(w.lit), plane(w.eroded), w.fov_rows, true);
+    w.ops.morph(plane(w.lit), plane(w.eroded), std::span<const int>(w.fov_rows.data(), 7), true);
 
     if (params_.method == GestureSegmentation::kLikelihood) {
         // The tool probability, only where lit: the 5x5 Gaussian of a pixel inside the

@@ -6,9 +6,12 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <span>
 #include <vector>
 
 #include "constant_velocity.hpp"
+#include "endotower/vision/block_mean.hpp"
+#include "endotower/vision/mask_ops.hpp"
 
 namespace endotower::vision {
 
@@ -125,7 +128,9 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double e
     const double ux = dx / len, uy = dy / len, nx = -uy, ny = ux;
     std::array<double, kSamples> ts{}, os{};
     int n = 0;
-    const int steps = static_cast<int>(std::ceil(reach));
+    // grad below holds 2 steps + 1 values (reach is 2.5 analysis px at full size: 15
+    // steps at 1920 px; an 8K frame would ask for 60).
+    const int steps = std::min(static_cast<int>(std::ceil(reach)), 31);
     for (int k = 0; k < kSamples; ++k) {
         const double t = (begin + (end - begin) * (k + 0.5) / kSamples) * len;
         const double px = e.a.x + t * ux, py = e.a.y + t * uy;
@@ -163,7 +168,12 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double e
 
 struct LikelihoodToolTracker::Work {
     double scale = 1.0;
-    cv::Mat small, prob, raw, gray, lit, rim, binary, labels, kernel_fov, kernel_open;
+    cv::Mat small, prob, raw, gray, lit, eroded, binary, labels;
+    BlockMean reduce;                // integer factors; others: cv::resize (allocates)
+    MaskOps ops;                     // the image operations, OpenCV's bytes, no allocation
+    std::vector<std::uint32_t> rim;  // distance to the unlit surround, 16.16 fixed point
+    std::array<int, 15> fov_rows{};  // the erosion's ellipse, half-width per row
+    int fov_row_count = 0;
     std::vector<int> offsets, fill;
     std::vector<Px> pixels;
     std::vector<RimPixel> entries;
@@ -188,19 +198,31 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     w.prob.create(sh, sw, CV_8U);
     w.raw.create(sh, sw, CV_8U);
     w.lit.create(sh, sw, CV_8U);
+    w.eroded.create(sh, sw, CV_8U);
     w.gray.create(sh, sw, CV_8U);
-    w.rim.create(sh, sw, CV_32F);
     w.binary.create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
-    const int m = 2 * params_.surround_margin_px + 1;
-    w.kernel_fov = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(m, m));
-    w.kernel_open = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
-    w.offsets.reserve(4096);
-    w.fill.reserve(4096);
-    w.pixels.reserve(static_cast<std::size_t>(sw) * sh);
-    w.entries.reserve(static_cast<std::size_t>(sw) * sh / 4);
-    w.owner.reserve(static_cast<std::size_t>(sw) * sh);
-    w.candidates.reserve(64);
+    w.reduce.configure(format.width, format.height, sw, sh, 3);
+    w.ops.configure(sw, sh);
+    w.rim.assign(static_cast<std::size_t>(sw) * sh, 0);
+    w.fov_row_count = MaskOps::ellipse_rows(params_.surround_margin_px, w.fov_rows);
+    // Every list at its largest possible size, so no frame reallocates: regions at most
+    // one per 2 x 2 block (no two 8-adjacent), rim pixels and their runs at most all
+    // pixels.
+    const auto area = static_cast<std::size_t>(sw) * sh;
+    const std::size_t regions =
+        static_cast<std::size_t>((sw + 1) / 2) * static_cast<std::size_t>((sh + 1) / 2) + 2;
+    w.offsets.reserve(regions);
+    w.fill.reserve(regions);
+    w.pixels.reserve(area);
+    w.entries.reserve(area);
+    w.runs.reserve(area);
+    w.owner.reserve(area);
+    // Candidates: regions of at least min_area_fraction of the picture, each cut in
+    // at most kMaxTools.
+    const double f = params_.min_area_fraction;
+    const std::size_t large = f > 0 ? static_cast<std::size_t>(1.0 / f) + 1 : regions;
+    w.candidates.reserve(kMaxTools * std::min(large, regions));
     for (Track& t : w.tracks) t = Track{};
 }
 
@@ -212,7 +234,9 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
         return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (w.scale < 1.0)
+    if (w.reduce.ready())
+        w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
+    else if (w.scale < 1.0)
         cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
     else
         full.copyTo(w.small);
@@ -238,22 +262,29 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     for (int acc = 0; median < 255 && (acc += hist[median]) < W * H / 2;) ++median;
     const double level =
         std::max<double>(params_.surround_level, params_.surround_fraction * median);
-    cv::blur(w.gray, w.gray, cv::Size(9, 9));
-    cv::threshold(w.gray, w.lit, level, 255, cv::THRESH_BINARY);
-    const cv::Moments fov = cv::moments(w.lit, true);
+    // The operations are OpenCV's, byte for byte (MaskOps, BlockMean: tested against
+    // cv::blur + threshold + moments, distanceTransform, erode, GaussianBlur + threshold +
+    // and, morphologyEx OPEN, connectedComponents), without their per-call allocations.
+    auto plane = [](cv::Mat& m) {
+        return BytePlane{m.data, m.cols, m.rows, static_cast<std::size_t>(m.step)};
+    };
+    // cv::threshold compares 8-bit pixels with the threshold's floor.
+    const LitMoments fov =
+        w.ops.lit_field(plane(w.gray), static_cast<int>(std::floor(level)), plane(w.lit));
     if (fov.m00 <= 0) return 0;
     w.fov_cx = fov.m10 / fov.m00;
     w.fov_cy = fov.m01 / fov.m00;
     w.fov_r = std::sqrt(fov.m00 / M_PI);
     // Distance to the edge of the picture (unlit, or the frame's border).
-    cv::distanceTransform(w.lit, w.rim, cv::DIST_L2, 3);
-    cv::erode(w.lit, w.lit, w.kernel_fov);
+    w.ops.chamfer(plane(w.lit), 0, 0, W, H, w.rim.data());
+    w.ops.morph(plane(w.lit), plane(w.eroded),
+                std::span<const int>(w.fov_rows.data(), static_cast<std::size_t>(w.fov_row_count)),
+                true);
     w.prob.copyTo(w.raw);  // before smoothing: how solidly a region is tool-coloured
-    cv::GaussianBlur(w.prob, w.prob, cv::Size(5, 5), 1.2);
-    cv::threshold(w.prob, w.binary, params_.threshold - 1, 255, cv::THRESH_BINARY);
-    cv::bitwise_and(w.binary, w.lit, w.binary);
-    cv::morphologyEx(w.binary, w.binary, cv::MORPH_OPEN, w.kernel_open);
-    const int n = cv::connectedComponents(w.binary, w.labels, 8, CV_32S);
+    w.ops.smooth_at_least(plane(w.raw), params_.threshold, plane(w.eroded), plane(w.binary),
+                          plane(w.prob));
+    w.ops.open3(plane(w.binary), plane(w.binary));
+    const int n = w.ops.label(plane(w.binary), w.labels.ptr<std::int32_t>(0));
 
     // Pixels grouped by region (counting sort), so each region is visited once.
     w.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
@@ -275,7 +306,10 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     auto rim_distance = [&](double x, double y) {
         const int xi = std::clamp(static_cast<int>(std::lround(x)), 0, W - 1),
                   yi = std::clamp(static_cast<int>(std::lround(y)), 0, H - 1);
-        return std::min<double>({w.rim.at<float>(yi, xi), x + 1, y + 1, W - x, H - y});
+        // cv::distanceTransform's float: the 16.16 value converted, then scaled.
+        const float rim =
+            static_cast<float>(w.rim[static_cast<std::size_t>(yi) * W + xi]) * (1.f / 65536.f);
+        return std::min<double>({rim, x + 1, y + 1, W - x, H - y});
     };
     w.candidates.clear();
     const std::size_t nt = std::min(params_.max_tools, kMaxTools);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <climits>
 #include <cstring>
+#include <opencv2/imgproc.hpp>
 
 namespace endotower::vision {
 
@@ -104,6 +105,19 @@ LitMoments MaskOps::lit_field(BytePlane g, int threshold, BytePlane lit) {
     return {static_cast<double>(m00), static_cast<double>(m10), static_cast<double>(m01)};
 }
 
+int MaskOps::ellipse_rows(int r, std::array<int, 15>& rows) {
+    r = std::clamp(r, 0, 7);
+    const int m = 2 * r + 1;
+    const cv::Mat e = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(m, m));
+    for (int y = 0; y < m; ++y) {  // each row of the ellipse is centred on column r
+        const std::uint8_t* row = e.ptr<std::uint8_t>(y);
+        int first = 0;
+        while (first < m && row[first] == 0) ++first;
+        rows[static_cast<std::size_t>(y)] = first < m ? r - first : -1;
+    }
+    return m;
+}
+
 void MaskOps::morph(BytePlane in, BytePlane out, std::span<const int> half_widths, bool erode) {
     const int w = in.width, h = in.height, c = static_cast<int>(half_widths.size()) / 2;
     const std::uint8_t pad = erode ? 255 : 0;
@@ -147,7 +161,8 @@ void MaskOps::open3(BytePlane in, BytePlane out) {
     morph(tmp, out, kSquare, false);
 }
 
-void MaskOps::smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out) {
+void MaskOps::smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out,
+                              BytePlane smoothed) {
     // Q8.8 taps; the row pass stays in 16 bits (255 x 256), the column pass in 32.
     constexpr std::uint32_t k0 = 22, k1 = 62, k2 = 88;
     const int w = in.width, h = in.height;
@@ -178,6 +193,12 @@ void MaskOps::smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, B
         for (int x = 0; x < w; ++x) {
             const std::uint32_t v = k0 * (a[x] + e[x]) + k1 * (b[x] + d[x]) + k2 * c[x];
             o[x] = static_cast<std::uint8_t>((v >= limit ? 255 : 0) & (m[x] != 0 ? 255 : 0));
+        }
+        if (smoothed.data != nullptr) {
+            std::uint8_t* q = smoothed.row(y);
+            for (int x = 0; x < w; ++x)
+                q[x] = static_cast<std::uint8_t>(
+                    (k0 * (a[x] + e[x]) + k1 * (b[x] + d[x]) + k2 * c[x] + 32768u) >> 16);
         }
     }
 }

@@ -1,4 +1,4 @@
-// BlockMean: the odd integer-factor reduction gives cv::resize's INTER_AREA bytes.
+// BlockMean: the integer-factor reduction gives cv::resize's INTER_AREA bytes.
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
@@ -40,9 +40,20 @@ TEST(BlockMean, OddFactorsGiveTheInterAreaBytes) {
     expect_like_inter_area(64, 48, 1, 3);  // a copy
 }
 
-TEST(BlockMean, RefusesWhatIsNotAnOddIntegerFactor) {
+// Even factors round ties: up at 2 (OpenCV's own 2 x 2 path), to even at 4, 6, 8.
+// Random bytes make ties common (a quarter of 2 x 2 sums end in .5).
+TEST(BlockMean, EvenFactorsGiveTheInterAreaBytes) {
+    expect_like_inter_area(640, 480, 2, 3);
+    expect_like_inter_area(1280, 720, 2, 3);
+    expect_like_inter_area(1920, 1080, 6, 3);
+    expect_like_inter_area(1280, 720, 4, 3);
+    expect_like_inter_area(1920, 1080, 8, 1);
+    expect_like_inter_area(98, 14, 2, 1);
+}
+
+TEST(BlockMean, RefusesWhatIsNotAnIntegerFactor) {
     BlockMean reduce;
-    EXPECT_FALSE(reduce.configure(1280, 720, 640, 360, 3));   // 2: even
+    EXPECT_FALSE(reduce.configure(3840, 2160, 240, 135, 3));  // 16: past the table
     EXPECT_FALSE(reduce.configure(1920, 1080, 640, 361, 3));  // rows not 3 x
     EXPECT_FALSE(reduce.configure(1000, 600, 640, 384, 3));   // not an integer
     EXPECT_FALSE(reduce.configure(1920, 1080, 0, 0, 3));

@@ -11,6 +11,7 @@
 
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/tool_likelihood.hpp"
+#include "heap_counter.hpp"
 
 namespace endotower::vision {
 namespace {
@@ -244,6 +245,33 @@ TEST(LikelihoodToolTracker, CrossingKeepsIdentitiesFrameByFrame) {
         }
     }
     EXPECT_NE(ids[0], ids[1]);
+}
+
+// The per-frame rule: after a few frames the tracker allocates nothing, in our code or
+// inside the image operations it calls (operator new and the C allocator), through a
+// crossing (the shared region is split by the predicted shafts) at 640x480 (analysis
+// at half size) and at 1920x1080 (a sixth).
+TEST(LikelihoodToolTracker, AllocatesNothingPerFrame) {
+    for (const int scale : {1, 3}) {
+        LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+        std::vector<cv::Mat> frames;
+        for (int t = 0; t < 24; ++t) {
+            cv::Mat img = scope_frame({{{250.0 + 6 * t, 250}, 185, 24}, {{330, 170}, 90, 16}});
+            if (scale != 1) cv::resize(img, img, {}, scale * 1.0, scale * 1.0 * 1080 / 1440);
+            frames.push_back(img);
+        }
+        tracker.configure(view(frames[0]).format);
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        std::size_t found = 0;
+        for (int t = 0; t < 8; ++t) tracker.track(view(frames[t]), out);
+        test::set_counting(true);
+        for (int t = 8; t < 24; ++t) found += tracker.track(view(frames[t]), out);
+        test::set_counting(false);
+        EXPECT_EQ(found, 32u) << scale;  // both tools in every counted frame
+        if (test::heap_allocations() < 0) GTEST_SKIP() << "allocations not counted (sanitizer)";
+        EXPECT_EQ(test::heap_allocations(), 0) << scale;
+        EXPECT_EQ(test::c_allocations(), 0) << scale;
+    }
 }
 
 // A tip that comes fast under the other tool's shaft and stops there, hidden (two tools

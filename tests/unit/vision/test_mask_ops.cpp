@@ -163,5 +163,10 @@ TEST(MaskOps, SmoothAtLeastIsTheGaussianThresholdAndMask) {
             ops.smooth_at_least(plane(in), t, plane(mask), plane(got));
             EXPECT_EQ(cv::norm(want, got, cv::NORM_INF), 0.0) << size << " t " << t;
         }
+        // The blurred bytes themselves, on request (the likelihood tracker sums them).
+        cv::Mat want, got(size, CV_8U), smoothed(size, CV_8U);
+        cv::GaussianBlur(in, want, cv::Size(5, 5), 1.2);
+        ops.smooth_at_least(plane(in), 128, plane(mask), plane(got), plane(smoothed));
+        EXPECT_EQ(cv::norm(want, smoothed, cv::NORM_INF), 0.0) << size;
     }
 }

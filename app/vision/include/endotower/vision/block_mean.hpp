@@ -1,12 +1,13 @@
-// BlockMean: reduces an 8-bit image of `channels` interleaved channels by an odd
-// integer factor k in both directions, each output pixel the mean of its k x k input
-// block rounded to the nearest integer: (sum + k^2 / 2) / k^2. These are the bytes
-// cv::resize gives with INTER_AREA at that factor (its integer-factor path rounds
-// sum / k^2 to nearest, and k^2 odd leaves no ties; tested), in one pass over the input
-// with one row of column sums and no threads.
+// BlockMean: reduces an 8-bit image of `channels` interleaved channels by an integer
+// factor k (1..15) in both directions, each output pixel the mean of its k x k input
+// block rounded to the nearest integer as cv::resize's INTER_AREA integer-factor path
+// rounds it: ties up for k = 2, to even for even k >= 4 (sum x float(1 / k^2)), none
+// for odd k. So these are its bytes (tested for k = 1..8), in one pass over the input
+// with one row of column sums, no threads and no allocation (cv::resize allocates its
+// tables per call).
 //
 // configure() sizes the buffers (the only allocation) and returns false when the
-// sizes are not an odd integer factor apart (k = 1, a copy, included); run() then does
+// sizes are not an integer factor apart (k = 1, a copy, included); run() then does
 // nothing. run() reads `src` (rows of `src_stride` bytes) and writes `dst` (rows of
 // `dst_stride` bytes); no exceptions, no allocation.
 #pragma once

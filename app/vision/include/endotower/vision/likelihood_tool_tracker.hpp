@@ -30,6 +30,10 @@
 // more than 20 degrees is the other tool's part, and the track reports its prediction
 // at half confidence, up to `max_coast_frames`. A tool missing for `keep_frames`
 // frames loses its id. Results in the full frame's coordinates. Owns the model.
+// configure() sizes every buffer; track() then allocates nothing (its image operations
+// are MaskOps and BlockMean, OpenCV's bytes without OpenCV's per-call buffers), except
+// that a frame width that is not an integer multiple of the analysis width (up to 15)
+// is still reduced by cv::resize. `surround_margin_px` is at most 7.
 #pragma once
 
 #include <array>

@@ -5,11 +5,13 @@
 //               result's pixel count and coordinate sums (cv::moments(binary) m00/m10/m01);
 //   morph       cv::erode / cv::dilate with a structuring element given per row as a
 //               centred half-width (-1: empty row, at most 7; e.g. MORPH_ELLIPSE 7x7 is
-//               0,2,3,3,3,2,0), the border ignored (the default border value), in != out;
+//               0,2,3,3,3,2,0: ellipse_rows), the border ignored (the default border
+//               value), in != out;
 //   open3       cv::morphologyEx MORPH_OPEN with a 3x3 square;
 //   smooth_at_least  cv::GaussianBlur 5x5, sigma 1.2 (8-bit: OpenCV's bit-exact fixed
 //               point, taps 22 62 88 62 22 / 256 each way, reflect-101, rounded), then
-//               >= threshold and nonzero in `and_mask` gives 255, else 0;
+//               >= threshold and nonzero in `and_mask` gives 255, else 0 (and, when
+//               `smoothed` is given, the blurred bytes themselves);
 //   label       cv::connectedComponentsWithStats, 8-connected: labels 1..n-1 in the order
 //               of each component's first pixel in raster order (0 = background), its
 //               area and bounding box; returns n;
@@ -21,6 +23,7 @@
 // allocation); the operations take borrowed planes of at most that size. No exceptions.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -49,8 +52,12 @@ public:
     void configure(int width, int height);
     LitMoments lit_field(BytePlane gray, int threshold, BytePlane lit);
     void morph(BytePlane in, BytePlane out, std::span<const int> half_widths, bool erode);
+    // The rows of cv::getStructuringElement(MORPH_ELLIPSE, 2 r + 1) as morph() takes them,
+    // r in 0..7 (clamped); returns their number, 2 r + 1.
+    static int ellipse_rows(int r, std::array<int, 15>& rows);
     void open3(BytePlane in, BytePlane out);  // in and out may be the same plane
-    void smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out);
+    void smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out,
+                         BytePlane smoothed = {});
     int label(BytePlane mask, std::int32_t* labels);  // labels: width x height, packed
     const std::vector<Component>& components() const { return components_; }  // per label
     void chamfer(BytePlane mask, int x0, int y0, int x1, int y1, std::uint32_t* out);
