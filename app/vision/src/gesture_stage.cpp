@@ -9,28 +9,32 @@ GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns,
     const auto near = [still_px](Point2 a, Point2 b) {
         return std::hypot(a.x - b.x, a.y - b.y) <= still_px;
     };
-    const auto restart = [&](int l, Point2 at, hal::Nanos since) {
+    // A new hold; `frames` of it already seen (a pending label's run), all agreeing.
+    const auto restart = [&](int l, Point2 at, hal::Nanos since, int frames) {
         label_ = l, anchor_ = seen_ = at, start_ns_ = since, agreed_ns_ = t_ns, fired_ = false;
-        pending_ = -1;
+        pending_ = -1, frames_ = agreed_ = frames;
     };
     if (label == label_ && label >= 0) {
         if (near(where, anchor_))
-            agreed_ns_ = t_ns, seen_ = where, pending_ = -1;
+            agreed_ns_ = t_ns, seen_ = where, pending_ = -1, ++frames_, ++agreed_;
         else
-            restart(label, where, t_ns);  // moved: a new hold
+            restart(label, where, t_ns, 1);  // moved: a new hold
     } else if (label_ < 0) {
-        restart(label, where, t_ns);
+        restart(label, where, t_ns, 1);
     } else {
         // Another label (or none): the new one's hold dates from its first frame.
+        ++frames_;
         if (label != pending_ || (label >= 0 && !near(where, pending_anchor_)))
-            pending_ = label, pending_anchor_ = where, pending_ns_ = t_ns;
+            pending_ = label, pending_anchor_ = where, pending_ns_ = t_ns, pending_frames_ = 0;
+        ++pending_frames_;
         if (static_cast<double>(t_ns - agreed_ns_) / 1e6 > params_.dropout_ms)
-            restart(label, pending_anchor_, pending_ns_);
+            restart(label, pending_anchor_, pending_ns_, pending_frames_);
     }
     State s;
+    // Not held while fewer than min_support of its frames show it.
+    if (label_ < 0 || agreed_ < params_.min_support * frames_) return s;
     s.label = label_;
     s.where = seen_;
-    if (label_ < 0) return s;
     s.held_ms = static_cast<double>(t_ns - start_ns_) / 1e6;
     if (!fired_ && s.held_ms >= params_.hold_ms) s.fired = fired_ = true;
     return s;

@@ -189,6 +189,40 @@ TEST(GestureHold, ShortDropoutsKeepTheHoldARealChangeDatesFromItsFirstFrame) {
     }
 }
 
+// A label seen in one frame of four, each gap (120 ms) inside the dropout tolerance, is
+// not held (surgery_motion seed 39: two tools at rest read as a cross in 7 of 26 frames
+// opened the quadrant menu); one missing in one frame of three (two thirds) still fires
+// at exactly 1 s.
+TEST(GestureHold, ALabelInAMinorityOfItsFramesIsNotHeld) {
+    const hal::Nanos frame = 40'000'000;  // 25 fps
+    GestureHold flicker({1000.0, 0.03, 200.0});
+    for (int i = 0; i < 60; ++i) {
+        const GestureHold::State s =
+            flicker.update(i % 4 == 0 ? 4 : -1, {100.0, 50.0}, i * frame, 5.0);
+        EXPECT_FALSE(s.fired) << i;
+        if (i >= 2) {
+            EXPECT_EQ(s.label, -1) << i;  // 1 of 3 frames, then 1 of 4
+            EXPECT_DOUBLE_EQ(s.held_ms, 0.0) << i;
+        }
+    }
+    GestureHold mostly({1000.0, 0.03, 200.0});
+    int fired_at = -1;
+    for (int i = 0; i < 40; ++i) {
+        const GestureHold::State s =
+            mostly.update(i % 3 == 2 ? -1 : 4, {100.0, 50.0}, i * frame, 5.0);
+        EXPECT_EQ(s.label, 4) << i;
+        EXPECT_DOUBLE_EQ(s.held_ms, 40.0 * i) << i;
+        if (s.fired) fired_at = i;
+    }
+    EXPECT_EQ(fired_at, 25);
+    // Without the rule (min_support 0) the flicker is held and fires.
+    GestureHold old_rule({1000.0, 0.03, 200.0, 0.0});
+    bool fired = false;
+    for (int i = 0; i < 60; ++i)
+        fired = old_rule.update(i % 4 == 0 ? 4 : -1, {100.0, 50.0}, i * frame, 5.0).fired || fired;
+    EXPECT_TRUE(fired);
+}
+
 namespace {
 
 // Seven separable clusters in feature space, with a deterministic spread.

@@ -14,8 +14,11 @@
 // the hold began; moving starts a new hold. Another label (or none) for at most
 // `dropout_ms` (200) is a misclassified frame or two and the hold goes on; longer, and
 // the new label's hold is taken to have begun where it first appeared (so a real
-// change is not delayed). Times are the frames' capture times (exact on the virtual
-// clock).
+// change is not delayed). A hold counts only while at least `min_support` (0.5) of its
+// frames show its label: below that the frame reports no gesture and nothing fires (a
+// label that flickers in one frame of four, each gap under `dropout_ms`, is not held;
+// docs/gestures.md "Support"). Times are the frames' capture times (exact on the
+// virtual clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
 //               "tools": [{"label", "confidence", "entries", "arms", "tip_px": [x, y]}]}
@@ -36,6 +39,7 @@ struct GestureHoldParams {
     double hold_ms = 1000.0;
     double still_fraction = 0.03;
     double dropout_ms = 200.0;
+    double min_support = 0.5;
 };
 
 class GestureHold {
@@ -59,6 +63,7 @@ private:
     int pending_ = -1;  // the other label seen since the last agreeing frame
     Point2 pending_anchor_;
     hal::Nanos pending_ns_ = 0;
+    int frames_ = 0, agreed_ = 0, pending_frames_ = 0;  // the hold's frames, those agreeing
 };
 
 struct GestureStageParams {
