@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/kalman_tool_tracker.hpp"
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/tool_tracker_factory.hpp"
@@ -116,6 +117,29 @@ void BM_BookTracker1080p(benchmark::State& state) {
     time_tracking(state, *tracker, frames, fmt);
 }
 BENCHMARK(BM_BookTracker1080p)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+// The analysis reduction to 320 px wide: PAL 720x576 (factor 2.25) and the sznitman
+// clip's 384x288 (1.2), AreaMean's general path against cv::resize INTER_AREA (the same
+// bytes: test_area_mean.cpp). Arg: 0 cv::resize, 1 AreaMean; range(1): source width.
+void BM_AreaReduction(benchmark::State& state) {
+    const int w = static_cast<int>(state.range(1)), h = w * 4 / 5;
+    const int dw = 320, dh = static_cast<int>(std::lround(h * 320.0 / w));
+    cv::Mat src(h, w, CV_8UC3), dst(dh, dw, CV_8UC3);
+    cv::randu(src, 0, 256);
+    vision::AreaMean reduce;
+    reduce.configure(w, h, dw, dh, 3);
+    for (auto _ : state) {
+        if (state.range(0) == 0)
+            cv::resize(src, dst, dst.size(), 0, 0, cv::INTER_AREA);
+        else
+            reduce.run(src.data, src.step, dst.data, dst.step);
+        benchmark::DoNotOptimize(dst.data);
+    }
+}
+BENCHMARK(BM_AreaReduction)
+    ->ArgsProduct({{0, 1}, {384, 720}})
+    ->Unit(benchmark::kMicrosecond)
+    ->MinTime(1.0);
 
 }  // namespace
 

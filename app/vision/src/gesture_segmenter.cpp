@@ -5,14 +5,14 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "endotower/vision/block_mean.hpp"
+#include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
 
 namespace endotower::vision {
 
 struct GestureSegmenter::Work {
     double scale = 1.0;
-    BlockMean reduce;  // integer factors up to 15 (1920 -> 640); others: cv::resize
+    AreaMean reduce;  // INTER_AREA, no allocation (factor <= 15: else cv::resize)
     MaskOps ops;
     ContourTracer tracer;            // the features' contours (window <= the analysis size)
     std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths

@@ -6,11 +6,14 @@
 #include <span>
 #include <vector>
 
+#include "endotower/vision/area_mean.hpp"
+
 namespace endotower::vision {
 
 struct KalmanToolTracker::Work {
     double scale = 1.0;  // analysis pixels per full-resolution pixel
     cv::Mat small, gray, edges, lit, kernel;
+    AreaMean reduce;  // INTER_AREA without cv::resize's per-call allocation
     std::vector<cv::Vec4i> lines;
     std::vector<Segment> segments, gated;
     std::vector<char> used;  // segment already explains a tracked tool
@@ -41,6 +44,7 @@ void KalmanToolTracker::configure(const hal::FrameFormat& format) {
     const int sw = std::max(1, static_cast<int>(std::lround(format.width * w.scale)));
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
+    w.reduce.configure(format.width, format.height, sw, sh, 3);
     w.gray.create(sh, sw, CV_8UC1);
     w.edges.create(sh, sw, CV_8UC1);
     w.lit.create(sh, sw, CV_8UC1);
@@ -56,7 +60,8 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
     Work& w = *work_;
     if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty()) return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
-    if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
+    if (w.reduce.ready()) w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
+    else if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
     else full.copyTo(w.small);
 
     if (params_.red_binarised) {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "constant_velocity.hpp"
-#include "endotower/vision/block_mean.hpp"
+#include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
 
 namespace endotower::vision {
@@ -169,7 +169,7 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double e
 struct LikelihoodToolTracker::Work {
     double scale = 1.0;
     cv::Mat small, prob, raw, gray, lit, eroded, binary, labels;
-    BlockMean reduce;                // integer factors; others: cv::resize (allocates)
+    AreaMean reduce;                 // INTER_AREA, no allocation (factor <= 15: else cv::resize)
     MaskOps ops;                     // the image operations, OpenCV's bytes, no allocation
     std::vector<std::uint32_t> rim;  // distance to the unlit surround, 16.16 fixed point
     std::array<int, 15> fov_rows{};  // the erosion's ellipse, half-width per row
@@ -262,7 +262,7 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     for (int acc = 0; median < 255 && (acc += hist[median]) < W * H / 2;) ++median;
     const double level =
         std::max<double>(params_.surround_level, params_.surround_fraction * median);
-    // The operations are OpenCV's, byte for byte (MaskOps, BlockMean: tested against
+    // The operations are OpenCV's, byte for byte (MaskOps, AreaMean: tested against
     // cv::blur + threshold + moments, distanceTransform, erode, GaussianBlur + threshold +
     // and, morphologyEx OPEN, connectedComponents), without their per-call allocations.
     auto plane = [](cv::Mat& m) {

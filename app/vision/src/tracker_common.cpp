@@ -12,6 +12,7 @@ void AnalysisFrame::configure(const hal::FrameFormat& format, int analysis_width
     const int sw = std::max(1, static_cast<int>(std::lround(format.width * scale)));
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * scale)));
     small.create(sh, sw, CV_8UC3);
+    reduce.configure(format.width, format.height, sw, sh, 3);
     gray.create(sh, sw, CV_8UC1);
     lit.create(sh, sw, CV_8UC1);
     const int k = 2 * std::max(0, surround_margin_px) + 1;
@@ -25,7 +26,9 @@ bool AnalysisFrame::load(const hal::Frame& frame) {
         return false;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (full.size() == small.size())
+    if (reduce.ready())
+        reduce.run(frame.data, frame.format.stride, small.data, small.step);
+    else if (full.size() == small.size())
         full.copyTo(small);
     else
         cv::resize(full, small, small.size(), 0, 0, cv::INTER_AREA);

@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/tip_extractor.hpp"
 #include "endotower/vision/tool_tracker.hpp"
 
@@ -23,6 +24,7 @@ namespace endotower::vision::detail {
 struct AnalysisFrame {
     double scale = 1.0;  // analysis pixels per full-resolution pixel
     cv::Mat small, gray, lit, kernel;
+    AreaMean reduce;  // INTER_AREA without cv::resize's per-call allocation
     FieldOfView fov;
     int surround_level = 20;
 

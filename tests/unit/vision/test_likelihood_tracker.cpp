@@ -252,12 +252,14 @@ TEST(LikelihoodToolTracker, CrossingKeepsIdentitiesFrameByFrame) {
 // crossing (the shared region is split by the predicted shafts) at 640x480 (analysis
 // at half size) and at 1920x1080 (a sixth).
 TEST(LikelihoodToolTracker, AllocatesNothingPerFrame) {
-    for (const int scale : {1, 3}) {
+    // 640x480 (factor 2), 1920x1080 (6) and 768x432 (2.4: not an integer, the area
+    // reduction's general path).
+    for (const double scale : {1.0, 3.0, 1.2}) {
         LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
         std::vector<cv::Mat> frames;
         for (int t = 0; t < 24; ++t) {
             cv::Mat img = scope_frame({{{250.0 + 6 * t, 250}, 185, 24}, {{330, 170}, 90, 16}});
-            if (scale != 1) cv::resize(img, img, {}, scale * 1.0, scale * 1.0 * 1080 / 1440);
+            if (scale != 1) cv::resize(img, img, {}, scale, scale * 1080 / 1440);
             frames.push_back(img);
         }
         tracker.configure(view(frames[0]).format);
