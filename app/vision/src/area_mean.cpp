@@ -97,8 +97,9 @@ void AreaMean::run(const std::uint8_t* src, std::size_t src_stride, std::uint8_t
 
 void AreaMean::column_sums(const std::uint8_t* s, float* line) const {
     std::fill(line, line + line_.size(), 0.f);
-    // The same sums in the same order as OpenCV (float, no fused multiply-add: this
-    // file is built with -ffp-contract=off), so the same bytes.
+    // The same sums in the same order as OpenCV (float; fused multiply-adds where
+    // OpenCV's build has them: this file is built with -ffp-contract=fast), so the same
+    // bytes.
     if (channels_ == 3) {
         for (const Weight& w : columns_) {
             line[w.dst] += s[w.src] * w.alpha;
