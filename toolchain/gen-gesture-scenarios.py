@@ -135,6 +135,13 @@ def main():
         "test_random_grasper.yaml": single("test_random_grasper", "grasper", 611, 10, 1),
         "test_random_scissors.yaml": single("test_random_scissors", "scissors", 612, 10, 1),
         "test_random_double.yaml": double("test_random_double", 613, 10),
+        # Larger held-out sets (2026-11-26): 40 poses each, incisions on both sides, so
+        # the per-gesture rates are not read off 9 or 10 regions.
+        "test_random40_grasper_right.yaml": single("test_random40_grasper_right", "grasper", 621, 40, 1),
+        "test_random40_grasper_left.yaml": single("test_random40_grasper_left", "grasper", 622, 40, -1),
+        "test_random40_scissors_right.yaml": single("test_random40_scissors_right", "scissors", 623, 40, 1),
+        "test_random40_scissors_left.yaml": single("test_random40_scissors_left", "scissors", 624, 40, -1),
+        "test_random40_double.yaml": double("test_random40_double", 625, 40),
     }
     for name, text in files.items():
         with open(os.path.join(OUT, name), "w") as f:
