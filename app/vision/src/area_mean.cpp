@@ -42,6 +42,8 @@ bool AreaMean::configure(int src_width, int src_height, int dst_width, int dst_h
     rows_.clear();
     row_start_.clear();
     block_ = BlockMean{};
+    src_width_ = src_width;
+    src_height_ = src_height;
     if (src_width <= 0 || src_height <= 0 || dst_width <= 0 || dst_height <= 0 || channels <= 0)
         return false;
     // OpenCV's scale: the inverse of the inverse, so its last bit decides as there.

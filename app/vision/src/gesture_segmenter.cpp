@@ -104,7 +104,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (w.reduce.ready())
+    if (w.reduce.fits(frame.format.width, frame.format.height))
         w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
     else if (w.scale < 1.0)
         cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);

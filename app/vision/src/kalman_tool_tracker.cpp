@@ -60,7 +60,8 @@ std::size_t KalmanToolTracker::track(const hal::Frame& frame, std::span<ToolEsti
     Work& w = *work_;
     if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || w.small.empty()) return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data, frame.format.stride);
-    if (w.reduce.ready()) w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
+    if (w.reduce.fits(frame.format.width, frame.format.height))
+        w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
     else if (w.scale < 1.0) cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
     else full.copyTo(w.small);
 

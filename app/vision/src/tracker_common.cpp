@@ -26,7 +26,7 @@ bool AnalysisFrame::load(const hal::Frame& frame) {
         return false;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (reduce.ready())
+    if (reduce.fits(frame.format.width, frame.format.height))
         reduce.run(frame.data, frame.format.stride, small.data, small.step);
     else if (full.size() == small.size())
         full.copyTo(small);

@@ -76,3 +76,16 @@ TEST(AreaMean, RefusesWhatInterAreaDoesNotReduce) {
     reduce.run(nullptr, 0, &untouched, 1);  // not ready: does nothing
     EXPECT_EQ(untouched, 9);
 }
+
+// run() reads the configured source size: a caller must not hand it another frame.
+TEST(AreaMean, FitsOnlyTheConfiguredSourceSize) {
+    AreaMean reduce;
+    ASSERT_TRUE(reduce.configure(720, 576, 320, 256, 3));
+    EXPECT_TRUE(reduce.fits(720, 576));
+    EXPECT_FALSE(reduce.fits(1920, 1080));
+    EXPECT_FALSE(reduce.fits(720, 575));
+    ASSERT_TRUE(reduce.configure(1920, 1080, 320, 180, 3));  // the block path
+    EXPECT_TRUE(reduce.fits(1920, 1080));
+    EXPECT_FALSE(reduce.fits(720, 576));
+    EXPECT_FALSE(AreaMean{}.fits(0, 0));
+}

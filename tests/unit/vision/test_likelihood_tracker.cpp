@@ -251,6 +251,21 @@ TEST(LikelihoodToolTracker, CrossingKeepsIdentitiesFrameByFrame) {
 // inside the image operations it calls (operator new and the C allocator), through a
 // crossing (the shared region is split by the predicted shafts) at 640x480 (analysis
 // at half size) and at 1920x1080 (a sixth).
+// A frame of another size than configured (the pipeline reconfigures first, but the
+// tracker must not trust it): the block reduction would read 1920x1080 pixels out of a
+// 640x480 buffer (ASan's heap-buffer-overflow before the size check); now such a frame
+// is reduced by cv::resize and still tracked, both tools found.
+TEST(LikelihoodToolTracker, AFrameOfAnotherSizeThanConfiguredIsNotOverread) {
+    LikelihoodToolTracker tracker = make_tracker({{{300, 250}, 200, 24}});
+    cv::Mat big = scope_frame({{{280, 250}, 185, 24}, {{330, 170}, 90, 16}});
+    cv::resize(big, big, {1920, 1080});
+    tracker.configure(view(big).format);
+    cv::Mat small = scope_frame({{{280, 250}, 185, 24}, {{330, 170}, 90, 16}});
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    EXPECT_LE(tracker.track(view(small), out), ToolTracker::kMaxTools);
+    EXPECT_EQ(tracker.track(view(big), out), 2u);
+}
+
 TEST(LikelihoodToolTracker, AllocatesNothingPerFrame) {
     // 640x480 (factor 2), 1920x1080 (6) and 768x432 (2.4: not an integer, the area
     // reduction's general path).

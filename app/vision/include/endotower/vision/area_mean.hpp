@@ -11,8 +11,9 @@
 //
 // configure() returns false where OpenCV would not take one of these paths (a factor
 // below 1, unequal integer factors, an integer factor over 15); run() then does
-// nothing. run() reads `src` (rows of `src_stride` bytes) and writes `dst` (rows of
-// `dst_stride` bytes); no exceptions, no allocation.
+// nothing. Callers check fits() with each frame's size: a frame of another size than
+// configured must not reach run(). run() reads `src` (rows of `src_stride` bytes) and writes `dst`
+// (rows of `dst_stride` bytes); no exceptions, no allocation.
 #pragma once
 
 #include <cstddef>
@@ -27,6 +28,10 @@ class AreaMean {
 public:
     bool configure(int src_width, int src_height, int dst_width, int dst_height, int channels);
     bool ready() const { return block_.ready() || !row_start_.empty(); }
+    // Ready, and configured for a source of this size (run() reads that many pixels).
+    bool fits(int src_width, int src_height) const {
+        return ready() && src_width == src_width_ && src_height == src_height_;
+    }
     void run(const std::uint8_t* src, std::size_t src_stride, std::uint8_t* dst,
              std::size_t dst_stride);
 
@@ -43,7 +48,7 @@ private:
     std::vector<Weight> columns_, rows_;
     std::vector<int> row_start_;  // rows_ of output row y: [row_start_[y], row_start_[y + 1])
     std::vector<float> line_, sum_;
-    int channels_ = 0;
+    int channels_ = 0, src_width_ = 0, src_height_ = 0;
 };
 
 }  // namespace endotower::vision
