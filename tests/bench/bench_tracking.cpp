@@ -120,7 +120,7 @@ BENCHMARK(BM_BookTracker1080p)->DenseRange(0, 5)->Unit(benchmark::kMillisecond)-
 
 // The analysis reduction to 320 px wide: PAL 720x576 (factor 2.25) and the sznitman
 // clip's 384x288 (1.2), AreaMean's general path against cv::resize INTER_AREA (the same
-// bytes: test_area_mean.cpp). Arg: 0 cv::resize, 1 AreaMean; range(1): source width.
+// bytes: test_block_mean.cpp). Arg: 0 cv::resize, 1 AreaMean; range(1): source width.
 void BM_AreaReduction(benchmark::State& state) {
     const int w = static_cast<int>(state.range(1)), h = w * 4 / 5;
     const int dw = 320, dh = static_cast<int>(std::lround(h * 320.0 / w));
