@@ -15,6 +15,7 @@
 
 #include "endotower/app/trace_reader.hpp"
 #include "endotower_command.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -27,11 +28,7 @@ CommandResult run(const std::string& args) {
 
 fs::path fresh_dir(const std::string& name) {
     // Per process: several checkouts may run the suite at once on one machine.
-    fs::path d =
-        fs::temp_directory_path() / ("endotower_replay_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
+    return endotower::test::scratch_dir("replay_" + name);
 }
 
 // Numbered PNG frames with distinct, textured content (a gradient that moves).

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "endotower_command.hpp"
+#include "scratch_dir.hpp"
 
 namespace endotower::eval::test {
 
@@ -56,11 +57,7 @@ inline std::string truth_line(int frame, const std::string& tools, const std::st
 
 // A fresh directory under the test's temp dir.
 inline fs::path temp_dir(const std::string& name) {
-    fs::path d =
-        fs::temp_directory_path() / ("endotower_eval_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
+    return endotower::test::scratch_dir("eval_" + name);
 }
 
 inline std::string write_lines(const fs::path& path, const std::vector<std::string>& lines) {

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "board_config.hpp"
+#include "scratch_dir.hpp"
 
 namespace endotower::firmware {
 namespace {
@@ -15,8 +16,7 @@ namespace fs = std::filesystem;
 
 std::string write_board(const std::string& name, const std::string& text) {
     // One directory per process: CTest runs the tests of this file in parallel.
-    const fs::path dir = fs::temp_directory_path() / ("endotower_board_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    const fs::path dir = endotower::test::scratch_dir("board_test", false);
     const fs::path p = dir / name;
     std::ofstream(p) << text;
     return p.string();
@@ -281,8 +281,7 @@ namespace endotower::firmware {
 namespace {
 
 std::string write_input_board(const std::string& text) {
-    const auto dir = std::filesystem::temp_directory_path() / ("endotower_board_test_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
+    const auto dir = endotower::test::scratch_dir("board_test", false);
     const auto p = dir / "input.yaml";
     std::ofstream(p) << text;
     return p.string();
