@@ -127,6 +127,12 @@ def main():
         "train_scissors_left.yaml": single("train_scissors_left", "scissors", 604, 40, -1),
         "train_double.yaml": double("train_double", 605, 40),
         "train_apart.yaml": apart("train_apart", 606, 30),
+        # Three times the single-tool poses (2026-11-27), for the profile model's
+        # single-tool and profile networks only (docs/gestures.md, "Profile").
+        "more_single_grasper_right.yaml": single("more_single_grasper_right", "grasper", 631, 80, 1),
+        "more_single_grasper_left.yaml": single("more_single_grasper_left", "grasper", 632, 80, -1),
+        "more_single_scissors_right.yaml": single("more_single_scissors_right", "scissors", 633, 80, 1),
+        "more_single_scissors_left.yaml": single("more_single_scissors_left", "scissors", 634, 80, -1),
         # For the single-tool network only (train-gestures --single-tool-scene): the
         # SCI's activation pose (docs/gestures.md, "Two networks").
         "single_activation_scissors.yaml": activation("single_activation_scissors", "scissors", 607, 40),

@@ -15,7 +15,7 @@ namespace {
 void print_help() {
     std::printf(
         "usage: endotower train-gestures --scene DIR... [--test DIR]... --out FILE\n"
-        "                                [--features book|extended|topology]\n"
+        "                                [--features book|extended|topology|profile]\n"
         "                                [--segmentation "
         "likelihood|morphology]\n"
         "                                [--tool-model FILE] [--every N] [--hidden N] "
@@ -31,7 +31,8 @@ void print_help() {
         "  --features F       book: the six features, 6-20-7 (the book's baseline);\n"
         "                     extended: nine and a 'not a tool' class, 9-20-8;\n"
         "                     topology: those nine and the two largest holes, 11-20-8\n"
-        "                     (default)\n"
+        "                     (default); profile: those eleven and the width and runs\n"
+        "                     across the shaft at 10 stations back from the tip, 31-20-8\n"
         "  --segmentation S   likelihood (default) or morphology (eq. 3.3-3.5)\n"
         "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
         "  --every N          use every N-th frame (default 1)\n"
@@ -86,12 +87,13 @@ int run_train_gestures_command(const Args& args) {
         else if (k == "--tool-model")
             tool_model_path = v;
         else if (k == "--features") {
-            if (v != "book" && v != "extended" && v != "topology")
-                return usage_error("--features: expected book, extended or topology, got '" + v +
-                                   "'");
+            if (v != "book" && v != "extended" && v != "topology" && v != "profile")
+                return usage_error(
+                    "--features: expected book, extended, topology or profile, got '" + v + "'");
             params.features = v == "book"       ? vision::GestureFeatureSet::kBook
                               : v == "extended" ? vision::GestureFeatureSet::kExtended
-                                                : vision::GestureFeatureSet::kTopology;
+                              : v == "topology" ? vision::GestureFeatureSet::kTopology
+                                                : vision::GestureFeatureSet::kProfile;
         } else if (k == "--segmentation") {
             if (v != "likelihood" && v != "morphology")
                 return usage_error("--segmentation: expected likelihood or morphology, got '" + v +
@@ -128,6 +130,7 @@ int run_train_gestures_command(const Args& args) {
     }
     vision::GestureSegmenterParams seg_params;
     seg_params.method = params.segmentation;
+    seg_params.profile = params.features == vision::GestureFeatureSet::kProfile;
     vision::GestureSegmenter segmenter(&tool_model, seg_params);
 
     std::vector<vision::GestureSample> samples;

@@ -3,10 +3,12 @@
 // the scene simulator), with the shipped models; median and p99 per frame, heap
 // allocations per frame (operator new, and the C allocator, which OpenCV's buffers
 // come from; every thread), CPU time of the whole process (OpenCV's worker threads too).
+// ENDOTOWER_GESTURE_MODEL=FILE benchmarks another gesture model (e.g. a profile one).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -26,7 +28,10 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
     vision::GestureClassifier classifier;
     scene::Scenario scenario;
     if (!tool_model.load(root + "/board/sim/models/tool_likelihood.bin", error) ||
-        !classifier.load(root + "/board/sim/models/gestures.yml", error) ||
+        !classifier.load(std::getenv("ENDOTOWER_GESTURE_MODEL") != nullptr
+                             ? std::getenv("ENDOTOWER_GESTURE_MODEL")
+                             : root + "/board/sim/models/gestures.yml",
+                         error) ||
         !scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml", scenario,
                               error)) {
         state.SkipWithError(error.c_str());
@@ -46,6 +51,7 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
     }
     vision::GestureSegmenterParams p;
     p.method = classifier.segmentation();
+    p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
     vision::GestureSegmenter segmenter(&tool_model, p);
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
     segmenter.configure(fmt);

@@ -15,6 +15,7 @@ namespace {
 constexpr const char* kMagic = "ETGES1\n";
 constexpr const char* kNode = "opencv_ml_ann_mlp";
 constexpr const char* kTwoToolNode = "two_tool_ann_mlp";
+constexpr const char* kProfileNode = "profile_ann_mlp";
 
 std::uint64_t fnv1a(const char* p, std::size_t n) {
     std::uint64_t h = 1469598103934665603ull;
@@ -26,7 +27,8 @@ std::uint64_t fnv1a(const char* p, std::size_t n) {
 const char* feature_name(GestureFeatureSet s) {
     return s == GestureFeatureSet::kBook       ? "book"
            : s == GestureFeatureSet::kExtended ? "extended"
-                                               : "topology";
+           : s == GestureFeatureSet::kTopology ? "topology"
+                                               : "profile";
 }
 const char* segmentation_name(GestureSegmentation s) {
     return s == GestureSegmentation::kMorphology ? "morphology" : "likelihood";
@@ -77,9 +79,11 @@ int gesture_label_index(const std::string& label) {
 
 struct GestureClassifier::Net {
     cv::Ptr<cv::ml::ANN_MLP> ann, two_tool;  // two_tool: empty for one network
+    cv::Ptr<cv::ml::ANN_MLP> profile;        // the profile set's third network, else empty
     // Per-call buffers, sized once (classify() allocates nothing).
-    mutable cv::Mat input = cv::Mat(1, GestureFeatures::kTopologyCount, CV_32F),
-                    output = cv::Mat(1, kGestureLabelCount + 1, CV_32F);
+    mutable cv::Mat input = cv::Mat(1, GestureFeatures::kProfileCount, CV_32F),
+                    output = cv::Mat(1, kGestureLabelCount + 1, CV_32F),
+                    profile_output = cv::Mat(1, kGestureLabelCount + 1, CV_32F);
 };
 
 GestureClassifier::GestureClassifier() : net_(std::make_unique<Net>()) {}
@@ -98,10 +102,9 @@ namespace {
 // One network on the samples `take` accepts.
 template <typename Take>
 cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples, Take take,
-                                       const GestureTrainParams& params, const char* what,
+                                       const GestureTrainParams& params, int nf, const char* what,
                                        std::string& error) {
     const bool book = params.features == GestureFeatureSet::kBook;
-    const int nf = GestureFeatures::count(params.features);
     const int classes = book ? kGestureLabelCount : kGestureLabelCount + 1;
     std::array<std::vector<const GestureSample*>, kGestureLabelCount + 1> by_class;
     for (const GestureSample& s : samples)
@@ -149,38 +152,62 @@ cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples
 bool GestureClassifier::train(const std::vector<GestureSample>& samples,
                               const GestureTrainParams& params, std::string& error) {
     if (params.two_tool_network && params.features == GestureFeatureSet::kBook) {
-        error = "two networks need the extended or topology features (the book's is one 6-20-7)";
+        error =
+            "two networks need the extended, topology or profile features (the book's is one "
+            "6-20-7)";
         return false;
     }
+    const int nf = GestureFeatures::count(base_feature_set(params.features));
     const cv::Ptr<cv::ml::ANN_MLP> one = train_network(
-        samples, [](const GestureSample&) { return true; }, params,
+        samples, [](const GestureSample&) { return true; }, params, nf,
         params.two_tool_network ? " (single-tool network)" : "", error);
     if (one.empty()) return false;
-    cv::Ptr<cv::ml::ANN_MLP> two;
+    cv::Ptr<cv::ml::ANN_MLP> two, profile;
     if (params.two_tool_network) {
         two = train_network(
-            samples, [](const GestureSample& s) { return !s.single_tool_only; }, params,
+            samples, [](const GestureSample& s) { return !s.single_tool_only; }, params, nf,
             " (two-tool network)", error);
         if (two.empty()) return false;
     }
+    if (params.features == GestureFeatureSet::kProfile) {
+        profile = train_network(
+            samples, [](const GestureSample&) { return true; }, params,
+            GestureFeatures::kProfileCount, " (profile network)", error);
+        if (profile.empty()) return false;
+    }
     net_->ann = one;
     net_->two_tool = two;
+    net_->profile = profile;
     features_ = params.features;
     segmentation_ = params.segmentation;
     return true;
 }
 
-GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f,
+GestureResult GestureClassifier::run(bool two_tool_network, const GestureFeatures& f,
                                      bool one_tool) const {
     GestureResult r;
-    const int nf = f.count(features_);
     const auto v = f.as_vector();
-    cv::Mat in = net_->input.colRange(0, nf);
-    for (int k = 0; k < nf; ++k) in.at<float>(0, k) = v[k];
-    try {
-        ann.predict(in, net_->output);
-    } catch (const cv::Exception&) {
-        return r;
+    auto predict = [&](const cv::ml::ANN_MLP& ann, int nf, cv::Mat& out) {
+        cv::Mat in = net_->input.colRange(0, nf);
+        for (int k = 0; k < nf; ++k) in.at<float>(0, k) = v[k];
+        try {
+            ann.predict(in, out);
+        } catch (const cv::Exception&) {
+            return false;
+        }
+        return true;
+    };
+    const int nf = GestureFeatures::count(base_feature_set(features_));
+    if (!predict(two_tool_network ? *net_->two_tool : *net_->ann, nf, net_->output)) return r;
+    if (!two_tool_network && !net_->profile.empty()) {
+        // The profile set: the single-tool decision is the mean of the two networks'
+        // outputs (the topology network reads the fixed orientations best, the
+        // profile network the random ones; docs/gestures.md).
+        if (!predict(*net_->profile, GestureFeatures::kProfileCount, net_->profile_output))
+            return r;
+        float* a = net_->output.ptr<float>(0);
+        const float* b = net_->profile_output.ptr<float>(0);
+        for (int k = 0; k < net_->output.cols; ++k) a[k] = 0.5f * (a[k] + b[k]);
     }
     const float* o = net_->output.ptr<float>(0);
     const int classes = net_->output.cols;
@@ -197,19 +224,19 @@ GestureResult GestureClassifier::run(const cv::ml::ANN_MLP& ann, const GestureFe
 
 GestureResult GestureClassifier::classify(const GestureFeatures& f, int entries) const {
     if (!trained() || !f.valid) return {};
-    if (!has_two_tool_network()) return run(*net_->ann, f, false);
+    if (!has_two_tool_network()) return run(false, f, false);
     // A region entering the picture once is one tool (both tools of a two-tool gesture
     // come in through the rim: every such training region has two entries).
-    if (entries != 2) return run(*net_->ann, f, true);
+    if (entries != 2) return run(false, f, true);
     // Two entries: two tools meeting, or one tool lying along the rim (the activation
     // pose at the bottom of the view). The two-tool network names the two-tool
     // gestures; where it sees none, the region is read as a single tool.
-    const GestureResult two = run(*net_->two_tool, f, false);
+    const GestureResult two = run(true, f, false);
     if (two_tool_gesture(two.label)) return two;
     // Where the two networks disagree on whether two tools meet, no gesture: measured
     // better than the best single-tool reading (4 double triangles read as closed
     // scissors per region; docs/gestures.md).
-    GestureResult one = run(*net_->ann, f, false);
+    GestureResult one = run(false, f, false);
     if (two_tool_gesture(one.label)) one.label = -1;
     return one;
 }
@@ -227,6 +254,11 @@ std::string GestureClassifier::serialise() const {
         if (has_two_tool_network()) {
             fs << kTwoToolNode << "{";
             net_->two_tool->write(fs);
+            fs << "}";
+        }
+        if (!net_->profile.empty()) {
+            fs << kProfileNode << "{";
+            net_->profile->write(fs);
             fs << "}";
         }
         body += fs.releaseAndGetString();
@@ -259,20 +291,23 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     std::istringstream in(bytes.substr(magic.size(), body_size - magic.size()));
     std::string key, features, segmentation;
     in >> key >> features;
-    if (key != "features" ||
-        (features != "book" && features != "extended" && features != "topology"))
-        return fail("line 2: expected 'features book', 'features extended' or 'features topology'");
+    if (key != "features" || (features != "book" && features != "extended" &&
+                              features != "topology" && features != "profile"))
+        return fail(
+            "line 2: expected 'features book', 'features extended', 'features topology' or "
+            "'features profile'");
     in >> key >> segmentation;
     if (key != "segmentation" || (segmentation != "morphology" && segmentation != "likelihood"))
         return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
     const GestureFeatureSet fs_set = features == "book"       ? GestureFeatureSet::kBook
                                      : features == "extended" ? GestureFeatureSet::kExtended
-                                                              : GestureFeatureSet::kTopology;
-    const int nf = GestureFeatures::count(fs_set);
+                                     : features == "topology" ? GestureFeatureSet::kTopology
+                                                              : GestureFeatureSet::kProfile;
+    const int nf = GestureFeatures::count(base_feature_set(fs_set));
     const int classes =
         fs_set == GestureFeatureSet::kBook ? kGestureLabelCount : kGestureLabelCount + 1;
     const std::size_t net_at = bytes.find('\n', bytes.find('\n', magic.size()) + 1) + 1;
-    cv::Ptr<cv::ml::ANN_MLP> ann, two;
+    cv::Ptr<cv::ml::ANN_MLP> ann, two, profile;
     try {
         cv::FileStorage fs(
             bytes.substr(net_at, body_size - net_at),
@@ -289,20 +324,37 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         if (!fs[kTwoToolNode].empty()) {
             if (fs_set == GestureFeatureSet::kBook)
                 return fail(
-                    "a two-tool network with the book's features (extended or topology only)");
+                    "a two-tool network with the book's features (extended, topology or profile "
+                    "only)");
             if (const std::string why = network_shape_error(fs[kTwoToolNode], nf, classes);
                 !why.empty())
                 return fail("the two-tool network" + shape + why);
             two = cv::ml::ANN_MLP::create();
             two->read(fs[kTwoToolNode]);
         }
+        if (fs_set == GestureFeatureSet::kProfile) {
+            if (fs[kProfileNode].empty())
+                return fail("no profile network (the 'profile' features)");
+            if (const std::string why =
+                    network_shape_error(fs[kProfileNode], GestureFeatures::kProfileCount, classes);
+                !why.empty())
+                return fail("the profile network is not " +
+                            std::to_string(GestureFeatures::kProfileCount) + "-N-" +
+                            std::to_string(classes) + ": " + why);
+            profile = cv::ml::ANN_MLP::create();
+            profile->read(fs[kProfileNode]);
+        } else if (!fs[kProfileNode].empty()) {
+            return fail("a profile network with the '" + features + "' features (profile only)");
+        }
     } catch (const cv::Exception& e) {
         return fail("unreadable network (" + e.msg + ")");
     }
-    if (!ann->isTrained() || (!two.empty() && !two->isTrained()))
+    if (!ann->isTrained() || (!two.empty() && !two->isTrained()) ||
+        (!profile.empty() && !profile->isTrained()))
         return fail("unreadable network (OpenCV did not load it)");
     net_->ann = ann;
     net_->two_tool = two;
+    net_->profile = profile;
     features_ = fs_set;
     segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology
                                                  : GestureSegmentation::kLikelihood;

@@ -61,13 +61,45 @@ int changes_along(const std::uint8_t* mask, int w, int h, int stride, double cx,
 
 }  // namespace
 
-std::array<float, GestureFeatures::kTopologyCount> GestureFeatures::as_vector() const {
-    return {static_cast<float>(compactness), static_cast<float>(roughness),
-            static_cast<float>(elongation),  static_cast<float>(feret_elongation),
-            static_cast<float>(max_changes), static_cast<float>(min_changes),
-            static_cast<float>(solidity),    static_cast<float>(hu1),
-            static_cast<float>(hu2),         static_cast<float>(hole1),
-            static_cast<float>(hole2)};
+std::array<float, GestureFeatures::kProfileCount> GestureFeatures::as_vector() const {
+    std::array<float, kProfileCount> v = {
+        static_cast<float>(compactness), static_cast<float>(roughness),
+        static_cast<float>(elongation),  static_cast<float>(feret_elongation),
+        static_cast<float>(max_changes), static_cast<float>(min_changes),
+        static_cast<float>(solidity),    static_cast<float>(hu1),
+        static_cast<float>(hu2),         static_cast<float>(hole1),
+        static_cast<float>(hole2)};
+    for (int k = 0; k < kProfileStations; ++k) {
+        v[kTopologyCount + 2 * k] = profile_width[k];
+        v[kTopologyCount + 2 * k + 1] = profile_runs[k];
+    }
+    return v;
+}
+
+void measure_tip_profile(const std::uint8_t* mask, int width, int height, int stride, double tip_x,
+                         double tip_y, double axis_x, double axis_y, double radius,
+                         GestureFeatures& f) {
+    const double r = std::max(1.0, radius);
+    const int half = static_cast<int>(std::ceil(16 * r));  // 8 r in half-pixel steps
+    for (int k = 0; k < GestureFeatures::kProfileStations; ++k) {
+        const double s = (0.35 + 0.7 * k) * r;
+        const double cx = tip_x + s * axis_x, cy = tip_y + s * axis_y;
+        int on = 0, runs = 0, run = 0;
+        for (int i = -half; i <= half + 1; ++i) {
+            const double t = 0.5 * i;
+            const int x = round_half_away(cx - t * axis_y), y = round_half_away(cy + t * axis_x);
+            const bool set = i <= half && x >= 0 && y >= 0 && x < width && y < height &&
+                             mask[static_cast<std::size_t>(y) * stride + x] != 0;
+            if (set) {
+                ++on, ++run;
+            } else {
+                if (run >= 2) ++runs;
+                run = 0;
+            }
+        }
+        f.profile_width[k] = static_cast<float>(0.5 * on / (2 * r));
+        f.profile_runs[k] = static_cast<float>(runs);
+    }
 }
 
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,

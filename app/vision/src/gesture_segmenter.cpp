@@ -298,8 +298,20 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         }
         GestureBlob& b = out[found];
         b.arms = count_arms(win, tx - x0, ty - y0, R - 1.5);  // before the tracer marks it
+        // The profile's axis: from the tip to the entry it was reached from.
+        GestureFeatures profile;
+        if (params_.profile) {
+            double ex = ax, ey = ay;
+            if (nb > 0 && std::hypot(tx - bx2, ty - by2) < std::hypot(tx - ax, ty - ay))
+                ex = bx2, ey = by2;
+            const double len = std::max(1e-9, std::hypot(ex - tx, ey - ty));
+            measure_tip_profile(win.data, win.cols, win.rows, static_cast<int>(win.step), tx - x0,
+                                ty - y0, (ex - tx) / len, (ey - ty) / len, radius, profile);
+        }
         b.features = measure_gesture_features(win.data, win.cols, win.rows,
                                               static_cast<int>(win.step), w.tracer);
+        b.features.profile_width = profile.profile_width;
+        b.features.profile_runs = profile.profile_runs;
         if (!b.features.valid) continue;
         b.tip = {tx / w.scale, ty / w.scale};
         b.radius_px = radius / w.scale;

@@ -66,6 +66,7 @@ protected:
         EXPECT_TRUE(classifier.load(kModels + "gestures.yml", error)) << error;
         vision::GestureSegmenterParams p;
         p.method = classifier.segmentation();
+        p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
         vision::GestureSegmenter segmenter(&tool_model, p);
         std::vector<vision::GestureSample> samples;
         firmware::GestureDatasetStats stats;
@@ -116,8 +117,9 @@ TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
     EXPECT_EQ(
         run("train-gestures --scene " + train.string() + " --features six --out " + model.string()),
         2);
-    EXPECT_NE(slurp(dir() / "out.err").find("--features: expected book, extended or topology"),
-              std::string::npos);
+    EXPECT_NE(
+        slurp(dir() / "out.err").find("--features: expected book, extended, topology or profile"),
+        std::string::npos);
 }
 
 namespace {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <vector>
 
 #include "endotower/vision/gesture_classifier.hpp"
@@ -118,10 +120,51 @@ TEST(GestureFeatures, HolesAreTheGapsAJawAndACrossingToolClose) {
     d.rect(40, 30, 40, 30, 0);  // touches the first hole's corner only diagonally
     EXPECT_DOUBLE_EQ(d.measure().hole2, 200.0 / (79.0 * 79));
     const auto v = two.as_vector();
-    ASSERT_EQ(v.size(), 11u);
+    ASSERT_EQ(v.size(), 31u);
     EXPECT_FLOAT_EQ(v[9], static_cast<float>(two.hole1));
     EXPECT_FLOAT_EQ(v[10], static_cast<float>(two.hole2));
     EXPECT_EQ(GestureFeatures::count(GestureFeatureSet::kTopology), 11);
+}
+
+// The profile across the shaft: a straight shaft 10 px wide (r = 5) reads width 1 and
+// one run at every station; a V of two jaws, 2 px thick, opening towards the tip at
+// x = 20 (the shaft enters from the right) reads two runs of 2 px each near the tip.
+TEST(GestureFeatures, TipProfileReadsTheShaftsWidthAndTheGapBetweenJaws) {
+    Mask bar(120, 100);
+    bar.rect(20, 45, 119, 54);
+    GestureFeatures f;
+    measure_tip_profile(bar.px.data(), bar.w, bar.h, bar.w, 20, 50, 1, 0, 5, f);
+    for (int k = 0; k < GestureFeatures::kProfileStations; ++k) {
+        // Samples every half pixel: y = 50 + t rounds into rows 45..54 for t in
+        // [-5.5, 4.5): 20 samples, 10 px, = 2r.
+        EXPECT_FLOAT_EQ(f.profile_width[k], 1.0f) << k;
+        EXPECT_EQ(f.profile_runs[k], 1.0f) << k;
+    }
+    // With the axis pointing down from the bar's top edge the far stations lie below
+    // the bar (station 9 at row 78): nothing there.
+    measure_tip_profile(bar.px.data(), bar.w, bar.h, bar.w, 20, 45, 0, 1, 5, f);
+    EXPECT_EQ(f.profile_runs[9], 0.0f);
+
+    Mask v(120, 100);
+    v.rect(60, 45, 119, 54);         // shaft
+    for (int x = 20; x < 60; ++x) {  // jaws: rows 50 -/+ (2 + (60 - x) / 2), 2 px thick
+        const int off = 2 + (60 - x) / 2;
+        v.rect(x, 50 - off - 1, x, 50 - off);
+        v.rect(x, 50 + off - 1, x, 50 + off);
+    }
+    measure_tip_profile(v.px.data(), v.w, v.h, v.w, 20, 50, 1, 0, 5, f);
+    // Station 2 at 8.75 px from the tip (x = 28.75 -> column 29): the jaws at rows 32-33
+    // and 66-67: two runs of 4 samples (2 px) each.
+    EXPECT_EQ(f.profile_runs[2], 2.0f);
+    EXPECT_FLOAT_EQ(f.profile_width[2], 4.0f / 10);
+    measure_tip_profile(v.px.data(), v.w, v.h, v.w, 40, 50, 1, 0, 5, f);
+    EXPECT_EQ(f.profile_runs[0], 2.0f);
+    EXPECT_EQ(f.profile_runs[9], 1.0f);  // tip at x = 40: station 9 at x = 73.25, the shaft
+    EXPECT_FLOAT_EQ(f.profile_width[9], 1.0f);
+    const auto vec = f.as_vector();
+    EXPECT_FLOAT_EQ(vec[GestureFeatures::kTopologyCount + 18], f.profile_width[9]);
+    EXPECT_FLOAT_EQ(vec[GestureFeatures::kTopologyCount + 19], f.profile_runs[9]);
+    EXPECT_EQ(GestureFeatures::count(GestureFeatureSet::kProfile), 31);
 }
 
 TEST(GestureHold, FiresOnceAfterExactlyTheHoldTime) {
@@ -372,6 +415,73 @@ TEST(GestureClassifier, TopologyFeaturesTrainAndRoundTrip) {
         EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
     }
     EXPECT_EQ(back.serialise(), bytes);
+}
+
+// The profile set: a topology model (single-tool and two-tool networks, 11 inputs, the
+// same bytes as the topology model's) and a profile network on all 31 features whose
+// outputs are averaged with the single-tool network's; the two-tool calls are exactly
+// the topology model's; the file says so, round-trips, and is refused without its
+// profile network.
+TEST(GestureClassifier, ProfileFeaturesTwoToolNetworkReadsTheTopologySet) {
+    std::vector<GestureSample> samples = synthetic_samples(12);
+    for (GestureSample& s : samples) {
+        s.entries = s.label >= 4 ? 2 : 1;
+        s.features.hole1 = s.label == 5 ? 0.05 : s.label == 6 ? 0.2 : 0.0;
+        // Grasper and scissors alike but for the profile: the jaws' width.
+        if (s.label < 4) {
+            s.features.compactness = 1.5 + (s.label % 2);
+            s.features.elongation = 3.0 + (s.label % 2);
+        }
+        for (int k = 0; k < GestureFeatures::kProfileStations; ++k) {
+            s.features.profile_width[k] = s.label < 2 ? 0.9f : 0.5f;
+            s.features.profile_runs[k] = 1.0f + (s.label % 2 == 0 && k < 5);
+        }
+    }
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kProfile;
+    p.two_tool_network = true;
+    p.iterations = 2000;
+    GestureClassifier c, topo;
+    std::string error;
+    ASSERT_TRUE(c.train(samples, p, error)) << error;
+    p.features = GestureFeatureSet::kTopology;
+    ASSERT_TRUE(topo.train(samples, p, error)) << error;
+    int right = 0;
+    for (const auto& s : samples) right += c.classify(s.features, s.entries).label == s.label;
+    EXPECT_EQ(right, static_cast<int>(samples.size()));
+    for (const auto& s : samples) {
+        if (s.entries != 2) continue;
+        const GestureResult a = c.classify(s.features, 2), b = topo.classify(s.features, 2);
+        if (two_tool_gesture(b.label)) {
+            EXPECT_EQ(a.label, b.label);
+            EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
+        }
+    }
+    const std::string bytes = c.serialise();
+    EXPECT_NE(bytes.find("features profile\n"), std::string::npos);
+    const std::string topo_bytes = topo.serialise();
+    const std::size_t nets = bytes.find("profile_ann_mlp");
+    ASSERT_NE(nets, std::string::npos);
+    EXPECT_NE(bytes.find("layer_sizes: [ 31, 20, 8 ]", nets), std::string::npos);
+    // Both topology networks, byte for byte (after the header line naming the features).
+    const std::size_t a = bytes.find("segmentation"), b = topo_bytes.find("segmentation");
+    EXPECT_EQ(bytes.substr(a, nets - a), topo_bytes.substr(b, nets - a));
+    GestureClassifier back;
+    ASSERT_TRUE(back.parse(bytes, "m.yml", error)) << error;
+    EXPECT_EQ(back.features(), GestureFeatureSet::kProfile);
+    EXPECT_EQ(back.serialise(), bytes);
+    // A topology model named a profile model has no profile network.
+    std::string wrong = topo_bytes;
+    wrong.replace(wrong.find("features topology"), 17, "features profile");
+    const std::size_t tail = wrong.rfind("fnv1a ");
+    std::uint64_t h = 1469598103934665603ull;
+    for (std::size_t i = 0; i < tail; ++i)
+        h = (h ^ static_cast<std::uint8_t>(wrong[i])) * 1099511628211ull;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    wrong.replace(tail + 6, 16, hex);
+    EXPECT_FALSE(back.parse(wrong, "m.yml", error));
+    EXPECT_NE(error.find("no profile network"), std::string::npos) << error;
 }
 
 // Two networks: the two-tool network is exactly the one-network model of the unmarked

@@ -10,11 +10,13 @@
 // baseline), kExtended = nine features and an eighth output, "not a tool" (tissue
 // regions the segmentation mistakes for one; trained on such regions), so 9-20-8: the
 // improved classifier (docs/gestures.md); kTopology = those nine and the two hole
-// features, 11-20-8 (shipped: the holes tell cross, triangle and double triangle
-// apart). The segmentation method the model was trained on is stored with it, so the
-// firmware segments the same way.
+// features, 11-20-8 (the holes tell cross, triangle and double triangle apart);
+// kProfile (shipped) = a topology model and a third network, 31-20-8, on those eleven
+// and the profile across the shaft (GestureFeatures), whose outputs are averaged with
+// the single-tool network's. The segmentation method the model was trained on is
+// stored with it, so the firmware segments the same way.
 //
-// Two networks (`two_tool_network`, extended or topology): a region with two rim
+// Two networks (`two_tool_network`, extended, topology or profile): a region with two rim
 // entries (GestureBlob::entries 2: two tools meeting, or one along the rim) is read first
 // by the two-tool network, which alone names cross, triangle and double triangle; where
 // it names none of those the single-tool network decides (a two-tool class from it
@@ -24,15 +26,17 @@
 // two-tool gestures; both networks learn from every other sample (docs/gestures.md,
 // "Two networks").
 //
-// File: "ETGES1\n", "features book|extended|topology\n",
+// File: "ETGES1\n", "features book|extended|topology|profile\n",
 // "segmentation morphology|likelihood\n", the network as OpenCV FileStorage YAML (node
-// opencv_ml_ann_mlp; the two-tool network, when there is one, node two_tool_ann_mlp),
+// opencv_ml_ann_mlp; the two-tool network, when there is one, node two_tool_ann_mlp;
+// the profile network, with the profile features only and then required, profile_ann_mlp),
 // then "fnv1a " and the FNV-1a 64-bit hash of everything before it as 16 hex digits and
 // "\n" (the same non-standard offset basis as tool_likelihood.hpp's). parse()/load() refuse another
 // header, a hash mismatch, or a network that is not features-hidden-classes, with a message naming
-// the file (the network must be 6-N-7, 9-N-8 or 11-N-8, 2 <= N <= kGestureMaxHidden, every list as
-// long as the layers make it). serialise() gives the bytes (the caller writes them atomically).
-// classify() is for the per-frame path: no exceptions, no allocation.
+// the file (the network must be 6-N-7, 9-N-8 or 11-N-8, the profile network 31-N-8,
+// 2 <= N <= kGestureMaxHidden, every list as long as the layers make it). serialise() gives the
+// bytes (the caller writes them atomically). classify() is for the per-frame path: no exceptions,
+// no allocation.
 #pragma once
 
 #include <array>
@@ -59,6 +63,15 @@ int gesture_label_index(const std::string& label);  // -1 if not one of kGesture
 constexpr int kSingleToolLabels = 4;
 constexpr bool two_tool_gesture(int label) {
     return label >= kSingleToolLabels && label < kGestureLabelCount;
+}
+
+// The features of the single-tool and two-tool networks: the profile set's are the
+// topology set's, and a third network reads all 31 (the stations across the shaft);
+// the single-tool decision is the mean of its outputs and the single-tool network's
+// (measured: the profile alone lost fixed orientations and cost the two-tool gestures;
+// docs/gestures.md).
+constexpr GestureFeatureSet base_feature_set(GestureFeatureSet s) {
+    return s == GestureFeatureSet::kProfile ? GestureFeatureSet::kTopology : s;
 }
 
 constexpr int kGestureMaxHidden = 1000;  // hidden units; OpenCV needs at least 2
@@ -105,7 +118,8 @@ public:
 
 private:
     // one_tool: a two-tool class is not an answer; the best of the others is.
-    GestureResult run(const cv::ml::ANN_MLP& ann, const GestureFeatures& f, bool one_tool) const;
+    // two_tool_network: that network; else the single-tool one (and the profile one).
+    GestureResult run(bool two_tool_network, const GestureFeatures& f, bool one_tool) const;
     struct Net;
     std::unique_ptr<Net> net_;
     GestureFeatureSet features_ = GestureFeatureSet::kBook;

@@ -20,7 +20,9 @@
 //     when two tools cross and meet the rim twice); the shaft radius r: the largest
 //     distance-transform value near the entry; the tip window: the region's pixels
 //     within `window_radii` (8) x r of the tip (jaws and a little shaft), on which
-//     the features are measured (GestureFeatures: the book's six, the extras, the holes).
+//     the features are measured (GestureFeatures: the book's six, the extras, the holes,
+//     and, when `profile` is set, the profile across the axis from the tip to its
+//     entry, in units of r; else those stay 0).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
 // allocated in configure(); own code (BlockMean, MaskOps, ContourTracer) gives the bytes
@@ -51,6 +53,7 @@ struct GestureSegmenterParams {
     double border_touch_fraction = 0.06;
     double min_elongation = 2.5;
     double window_radii = 8.0;
+    bool profile = false;  // measure the profile features (a kProfile model reads them)
 };
 
 struct GestureBlob {
