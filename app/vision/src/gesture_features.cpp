@@ -84,15 +84,18 @@ void measure_tip_profile(const std::uint8_t* mask, int width, int height, int st
     for (int k = 0; k < GestureFeatures::kProfileStations; ++k) {
         const double s = (0.35 + 0.7 * k) * r;
         const double cx = tip_x + s * axis_x, cy = tip_y + s * axis_y;
-        int on = 0, runs = 0, run = 0;
-        for (int i = -half; i <= half + 1; ++i) {
+        // A gap of under kMinGap samples does not end a run: cracks in a jaw's mask
+        // (bright ribbed metal) are not the gap between open jaws.
+        constexpr int kMinGap = 4;
+        int on = 0, runs = 0, run = 0, gap = kMinGap;
+        for (int i = -half; i <= half + kMinGap; ++i) {
             const double t = 0.5 * i;
             const int x = round_half_away(cx - t * axis_y), y = round_half_away(cy + t * axis_x);
             const bool set = i <= half && x >= 0 && y >= 0 && x < width && y < height &&
                              mask[static_cast<std::size_t>(y) * stride + x] != 0;
             if (set) {
-                ++on, ++run;
-            } else {
+                ++on, ++run, gap = 0;
+            } else if (++gap == kMinGap) {
                 if (run >= 2) ++runs;
                 run = 0;
             }

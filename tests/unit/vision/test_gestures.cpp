@@ -140,6 +140,12 @@ TEST(GestureFeatures, TipProfileReadsTheShaftsWidthAndTheGapBetweenJaws) {
         EXPECT_FLOAT_EQ(f.profile_width[k], 1.0f) << k;
         EXPECT_EQ(f.profile_runs[k], 1.0f) << k;
     }
+    // A crack a pixel wide along the bar (row 49) is not a gap between jaws: one run, 9 px.
+    bar.rect(20, 49, 119, 49, 0);
+    measure_tip_profile(bar.px.data(), bar.w, bar.h, bar.w, 20, 50, 1, 0, 5, f);
+    EXPECT_EQ(f.profile_runs[5], 1.0f);
+    EXPECT_FLOAT_EQ(f.profile_width[5], 0.9f);
+    bar.rect(20, 49, 119, 49);
     // With the axis pointing down from the bar's top edge the far stations lie below
     // the bar (station 9 at row 78): nothing there.
     measure_tip_profile(bar.px.data(), bar.w, bar.h, bar.w, 20, 45, 0, 1, 5, f);
