@@ -133,6 +133,10 @@ def main():
         "more_single_grasper_left.yaml": single("more_single_grasper_left", "grasper", 632, 80, -1),
         "more_single_scissors_right.yaml": single("more_single_scissors_right", "scissors", 633, 80, 1),
         "more_single_scissors_left.yaml": single("more_single_scissors_left", "scissors", 634, 80, -1),
+        # Three times the crossings (2026-11-27), for the two-tool network only
+        # (train-gestures --two-tool-scene; docs/gestures.md, "Profile").
+        "more_double_a.yaml": double("more_double_a", 641, 40),
+        "more_double_b.yaml": double("more_double_b", 642, 40),
         # For the single-tool network only (train-gestures --single-tool-scene): the
         # SCI's activation pose (docs/gestures.md, "Two networks").
         "single_activation_scissors.yaml": activation("single_activation_scissors", "scissors", 607, 40),

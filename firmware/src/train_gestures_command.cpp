@@ -43,8 +43,10 @@ void print_help() {
         "                     one for single tools, one for two-tool regions (cross, triangle,\n"
         "                     double triangle, where the segmenter sees two entries);\n"
         "                     both learn from the --scene recordings, the single-tool one\n"
-        "                     also from the --single-tool-scene ones\n"
+        "                     also from the --single-tool-scene ones, the two-tool one\n"
+        "                     also from the --two-tool-scene ones\n"
         "  --single-tool-scene DIR  a recording for the single-tool network only (two)\n"
+        "  --two-tool-scene DIR     a recording for the two-tool network only (two)\n"
         "  --out FILE         the model file (e.g. board/sim/models/gestures.yml)\n\n"
         "Exit status: 0 written, 1 could not train or write, 2 bad usage or input.\n");
 }
@@ -64,7 +66,7 @@ bool whole(const std::string& v, long lo, long hi, long& out) {
 }  // namespace
 
 int run_train_gestures_command(const Args& args) {
-    std::vector<std::string> scenes, single_scenes, tests;
+    std::vector<std::string> scenes, single_scenes, two_scenes, tests;
     std::string out, tool_model_path;
     vision::GestureTrainParams params;
     params.features = vision::GestureFeatureSet::kTopology;
@@ -81,6 +83,8 @@ int run_train_gestures_command(const Args& args) {
             scenes.push_back(v);
         else if (k == "--single-tool-scene")
             single_scenes.push_back(v);
+        else if (k == "--two-tool-scene")
+            two_scenes.push_back(v);
         else if (k == "--test")
             tests.push_back(v);
         else if (k == "--out")
@@ -142,13 +146,17 @@ int run_train_gestures_command(const Args& args) {
             return usage_error(error);
     if (!single_scenes.empty() && !params.two_tool_network)
         return usage_error("--single-tool-scene needs --networks two");
-    for (const std::string& d : single_scenes) {
-        const std::size_t from = samples.size();
-        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
-                                 true))
-            return usage_error(error);
-        for (std::size_t i = from; i < samples.size(); ++i) samples[i].single_tool_only = true;
-    }
+    if (!two_scenes.empty() && !params.two_tool_network)
+        return usage_error("--two-tool-scene needs --networks two");
+    for (const bool single : {true, false})
+        for (const std::string& d : single ? single_scenes : two_scenes) {
+            const std::size_t from = samples.size();
+            if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error,
+                                     0.08, true))
+                return usage_error(error);
+            for (std::size_t i = from; i < samples.size(); ++i)
+                (single ? samples[i].single_tool_only : samples[i].two_tool_only) = true;
+        }
     std::array<int, vision::kGestureLabelCount + 1> per_class{};
     for (const auto& s : samples) ++per_class[s.label];
     std::printf("train-gestures: %d frames, %d tip regions, %d unlabelled, %zu samples:",

@@ -1,16 +1,16 @@
 // libFuzzer target: the board file (YAML), through the same load path the firmware
 // uses: the bytes are written to a file, then loaded.
-#include <unistd.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <string>
 
 #include "board_config.hpp"
+#include "fuzz_scratch_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    static const std::string path = "/tmp/endotower_fuzz_board_" + std::to_string(::getpid()) + ".yaml";
+    static const endotower::fuzz::ScratchFile scratch("endotower_fuzz_board_", ".yaml");
+    const std::string& path = scratch.path();
     std::FILE* f = std::fopen(path.c_str(), "wb");
     if (f == nullptr) return 0;
     std::fwrite(data, 1, size, f);

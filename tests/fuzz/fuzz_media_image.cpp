@@ -3,19 +3,19 @@
 // written to a per-process temporary file (DICOM is read from a file, see
 // media_image.cpp). Either an image of a sane size comes back, or an error naming
 // the file.
-#include <unistd.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <string>
 
 #include "endotower/media/media_image.hpp"
+#include "fuzz_scratch_file.hpp"
 
 using namespace endotower;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    static const std::string path = "/tmp/endotower_fuzz_media_" + std::to_string(getpid());
+    static const fuzz::ScratchFile scratch("endotower_fuzz_media_");
+    const std::string& path = scratch.path();
     std::FILE* f = std::fopen(path.c_str(), "wb");
     if (f == nullptr) __builtin_trap();
     if (size > 0 && std::fwrite(data, 1, size, f) != size) __builtin_trap();

@@ -159,7 +159,7 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
     }
     const int nf = GestureFeatures::count(base_feature_set(params.features));
     const cv::Ptr<cv::ml::ANN_MLP> one = train_network(
-        samples, [](const GestureSample&) { return true; }, params, nf,
+        samples, [](const GestureSample& s) { return !s.two_tool_only; }, params, nf,
         params.two_tool_network ? " (single-tool network)" : "", error);
     if (one.empty()) return false;
     cv::Ptr<cv::ml::ANN_MLP> two, profile;
@@ -171,7 +171,7 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
     }
     if (params.features == GestureFeatureSet::kProfile) {
         profile = train_network(
-            samples, [](const GestureSample&) { return true; }, params,
+            samples, [](const GestureSample& s) { return !s.two_tool_only; }, params,
             GestureFeatures::kProfileCount, " (profile network)", error);
         if (profile.empty()) return false;
     }

@@ -184,7 +184,10 @@ TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
     scene::FrameTruth truth;
     renderer.render(0, images[0], truth);
     renderer.render(8, images[1], truth);
-    GestureSegmenter segmenter(&model, {});
+    // The shipped path: the profile across the shaft is measured when the model reads it.
+    GestureSegmenterParams params;
+    params.profile = classifier.features() == GestureFeatureSet::kProfile;
+    GestureSegmenter segmenter(&model, params);
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
     segmenter.configure(fmt);
     std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs{};

@@ -576,6 +576,48 @@ TEST(GestureClassifier, TwoNetworksKeepTheTwoToolCallsAndReadOneToolAlongTheRim)
     EXPECT_NE(error.find("extended"), std::string::npos) << error;
 }
 
+// Samples marked two_tool_only (more crossing poses) train the two-tool network alone:
+// every single-tool call is the same bytes as without them, and the two-tool network
+// learns the new pose.
+TEST(GestureClassifier, TwoToolOnlySamplesLeaveTheSingleToolNetworkAsItWas) {
+    std::vector<GestureSample> samples = synthetic_samples(12);
+    for (GestureSample& s : samples) s.entries = s.label >= 4 ? 2 : 1;
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kExtended;
+    p.iterations = 2000;
+    p.two_tool_network = true;
+    std::string error;
+    GestureClassifier before;
+    ASSERT_TRUE(before.train(samples, p, error)) << error;
+    // A new crossing pose of the triangle (a shape of its own), for the two-tool network.
+    std::vector<GestureSample> more = samples, added;
+    for (GestureSample s : synthetic_samples(12)) {
+        if (s.label != 6) continue;
+        s.features.compactness += 9, s.features.elongation += 9;
+        s.label = 5, s.two_tool_only = true;
+        more.push_back(s);
+        added.push_back(s);
+    }
+    GestureClassifier c;
+    ASSERT_TRUE(c.train(more, p, error)) << error;
+    int single_calls = 0;
+    for (const auto& s : samples) {
+        if (s.entries != 1) continue;
+        const GestureResult a = c.classify(s.features, 1), b = before.classify(s.features, 1);
+        EXPECT_EQ(a.label, b.label);
+        EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
+        ++single_calls;
+    }
+    EXPECT_EQ(single_calls, 48);
+    int learned = 0, before_right = 0;
+    for (const auto& s : added) {
+        learned += c.classify(s.features, 2).label == 5;
+        before_right += before.classify(s.features, 2).label == 5;
+    }
+    EXPECT_EQ(learned, static_cast<int>(added.size()));
+    EXPECT_LT(before_right, static_cast<int>(added.size()));
+}
+
 TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
     // A pinkish lit field with a dark shaft from the right border ending in two jaws.
     const int W = 640, H = 480;

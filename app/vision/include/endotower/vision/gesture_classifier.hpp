@@ -23,8 +23,9 @@
 // counts as none); a region with one entry is one tool: the single-tool network's best
 // single-tool class or "not a tool". Samples marked `single_tool_only` (a new
 // single-tool pose) train only the single-tool network, so they cannot cost the
-// two-tool gestures; both networks learn from every other sample (docs/gestures.md,
-// "Two networks").
+// two-tool gestures; samples marked `two_tool_only` (more crossings) only the two-tool
+// network; both networks learn from every other sample (docs/gestures.md, "Two
+// networks").
 //
 // File: "ETGES1\n", "features book|extended|topology|profile\n",
 // "segmentation morphology|likelihood\n", the network as OpenCV FileStorage YAML (node
@@ -91,6 +92,7 @@ struct GestureSample {
     int label = 0;                  // index in kGestureLabels, or kNotATool
     int entries = 1;                // the region's rim entries (GestureBlob::entries)
     bool single_tool_only = false;  // trains only the single-tool network (two networks)
+    bool two_tool_only = false;     // trains only the two-tool network (two networks)
 };
 
 struct GestureResult {
