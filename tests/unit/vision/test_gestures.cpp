@@ -297,6 +297,22 @@ std::vector<GestureSample> synthetic_samples(int per_class) {
     return out;
 }
 
+// Expects a and b to make the same call (label and confidence) on every sample with
+// `entries` rim entries; returns how many were compared.
+int expect_same_calls(const GestureClassifier& a, const GestureClassifier& b,
+                      const std::vector<GestureSample>& samples, int entries) {
+    int compared = 0;
+    for (const auto& s : samples) {
+        if (s.entries != entries) continue;
+        const GestureResult x = a.classify(s.features, entries),
+                            y = b.classify(s.features, entries);
+        EXPECT_EQ(x.label, y.label);
+        EXPECT_DOUBLE_EQ(x.confidence, y.confidence);
+        ++compared;
+    }
+    return compared;
+}
+
 }  // namespace
 
 TEST(GestureClassifier, LearnsSeparableClassesAndTheModelFileRoundTrips) {
@@ -524,17 +540,10 @@ TEST(GestureClassifier, TwoNetworksKeepTheTwoToolCallsAndReadOneToolAlongTheRim)
     GestureClassifier c;
     ASSERT_TRUE(c.train(more, p, error)) << error;
     EXPECT_TRUE(c.has_two_tool_network());
-    int right = 0, two_tool_calls = 0;
+    int right = 0;
     for (const auto& s : more) right += c.classify(s.features, s.entries).label == s.label;
     EXPECT_EQ(right, static_cast<int>(more.size()));
-    for (const auto& s : samples) {
-        if (s.entries != 2) continue;
-        const GestureResult a = c.classify(s.features, 2), b = shipped.classify(s.features, 2);
-        EXPECT_EQ(a.label, b.label);
-        EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
-        ++two_tool_calls;
-    }
-    EXPECT_EQ(two_tool_calls, 36);
+    EXPECT_EQ(expect_same_calls(c, shipped, samples, 2), 36);
     // A single tool's shape with two entries (lying along the rim): the two-tool network
     // names no two-tool gesture there, and the single-tool network's call stands.
     for (const auto& s : samples) {
@@ -600,15 +609,7 @@ TEST(GestureClassifier, TwoToolOnlySamplesLeaveTheSingleToolNetworkAsItWas) {
     }
     GestureClassifier c;
     ASSERT_TRUE(c.train(more, p, error)) << error;
-    int single_calls = 0;
-    for (const auto& s : samples) {
-        if (s.entries != 1) continue;
-        const GestureResult a = c.classify(s.features, 1), b = before.classify(s.features, 1);
-        EXPECT_EQ(a.label, b.label);
-        EXPECT_DOUBLE_EQ(a.confidence, b.confidence);
-        ++single_calls;
-    }
-    EXPECT_EQ(single_calls, 48);
+    EXPECT_EQ(expect_same_calls(c, before, samples, 1), 48);
     int learned = 0, before_right = 0;
     for (const auto& s : added) {
         learned += c.classify(s.features, 2).label == 5;
