@@ -11,8 +11,12 @@ build=${1:-$repo/build/arm64}
 jobs=${JOBS:-2}
 
 "$repo/toolchain/install-cross-deps.sh"
+# The command tests are only built where they run (ALL=1).
+command_tests=OFF
+[ "${ALL:-0}" = 1 ] && command_tests=ON
 cmake -S "$repo" -B "$build" -DCMAKE_TOOLCHAIN_FILE="$repo/toolchain/aarch64-linux-gnu.cmake" \
-  -DCMAKE_BUILD_TYPE=Release -DENDOTOWER_BUILD_BENCH=OFF >/dev/null
+  -DCMAKE_BUILD_TYPE=Release -DENDOTOWER_BUILD_BENCH=OFF \
+  -DENDOTOWER_BUILD_COMMAND_TESTS="$command_tests" >/dev/null
 cmake --build "$build" -j"$jobs"
 file "$build/firmware/endotower" | grep -q "ARM aarch64" || { echo "cross-test: endotower is not an arm64 binary" >&2; exit 1; }
 # qemu-user runs the analysis 8-15x slower than the host: the replay's 2 s wall-clock

@@ -7,6 +7,7 @@
 
 #include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
+#include "reduce_frame.hpp"
 
 namespace endotower::vision {
 
@@ -102,14 +103,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     if (params_.method == GestureSegmentation::kLikelihood &&
         (model_ == nullptr || !model_->trained()))
         return 0;
-    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
-                       frame.format.stride);
-    if (w.reduce.fits(frame.format.width, frame.format.height))
-        w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
-    else if (w.scale < 1.0)
-        cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
-    else
-        full.copyTo(w.small);
+    detail::reduce_frame(frame, w.reduce, w.small);
     const int W = w.small.cols, H = w.small.rows;
 
     // Grey value per pixel and its histogram (four in turn: runs of one grey value do

@@ -12,6 +12,7 @@
 #include "constant_velocity.hpp"
 #include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
+#include "reduce_frame.hpp"
 
 namespace endotower::vision {
 
@@ -234,12 +235,7 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
         return 0;
     const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
                        frame.format.stride);
-    if (w.reduce.fits(frame.format.width, frame.format.height))
-        w.reduce.run(frame.data, frame.format.stride, w.small.data, w.small.step);
-    else if (w.scale < 1.0)
-        cv::resize(full, w.small, w.small.size(), 0, 0, cv::INTER_AREA);
-    else
-        full.copyTo(w.small);
+    detail::reduce_frame(frame, w.reduce, w.small);
     const int W = w.small.cols, H = w.small.rows;
 
     // Probability per pixel; brightness histogram for the field of view.

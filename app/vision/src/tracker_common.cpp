@@ -4,6 +4,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "reduce_frame.hpp"
+
 namespace endotower::vision::detail {
 
 void AnalysisFrame::configure(const hal::FrameFormat& format, int analysis_width,
@@ -24,14 +26,7 @@ bool AnalysisFrame::load(const hal::Frame& frame) {
     if (frame.format.pixel_format != hal::PixelFormat::kBgr24 || small.empty() ||
         frame.data == nullptr)
         return false;
-    const cv::Mat full(frame.format.height, frame.format.width, CV_8UC3, frame.data,
-                       frame.format.stride);
-    if (reduce.fits(frame.format.width, frame.format.height))
-        reduce.run(frame.data, frame.format.stride, small.data, small.step);
-    else if (full.size() == small.size())
-        full.copyTo(small);
-    else
-        cv::resize(full, small, small.size(), 0, 0, cv::INTER_AREA);
+    reduce_frame(frame, reduce, small);
     cv::cvtColor(small, gray, cv::COLOR_BGR2GRAY);
     // The lit field of view, shrunk by the margin: the scope's rim is no tool edge.
     cv::threshold(gray, lit, surround_level, 255, cv::THRESH_BINARY);
