@@ -199,6 +199,26 @@ TEST(SciMachine, OpenGrasperSelectsAndALoopConfirms) {
     EXPECT_LT(t, 3000 * kMs);
 }
 
+// A small loop (12 px radius: a 3 mm circle at 85 mm depth at 480 rows) still confirms:
+// its steps of 10.5 px pass the 2 % jitter floor (9.6 px) and turn 52 degrees each.
+TEST(SciMachine, ASmallLoopConfirms) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    ASSERT_EQ(d.m.state(), SciState::kConfirm);
+    hal::Nanos t = 1000 * kMs;
+    std::string confirmed;
+    for (int k = 1; k <= 14 && confirmed.empty(); ++k) {
+        t += 40 * kMs;
+        const double a = k * 52.0 * M_PI / 180;
+        d.frame(t, x + 12 * std::sin(a), y - 12 * (1 - std::cos(a)));
+        if (d.event() == "confirm") confirmed = d.menu();
+    }
+    EXPECT_EQ(confirmed, "3d_effects");
+}
+
 TEST(SciMachine, AnyOtherMotionDeniesAfterTwoSeconds) {
     Driver d;
     d.press(0, 320, 240);

@@ -4,6 +4,9 @@
 // exactly the expected sequence: button activation, the tip's highlight of CT and its
 // click 2.0 s (50 frames) later, not at 1.9 s; the wheel in the viewer; the sub-ring's
 // Main menu by dwell; the wheel to EXIT and the button's click: inactive.
+// Through the shipped gesture model (board/sim/scenarios/sci): activation by the
+// scissors held 3 s, no menu for tools resting against each other, the open grasper's
+// select confirmed by a loop or denied by a stroke, the cross's quadrant menu and off.
 // Also: bad sci: board keys are refused with FILE:LINE.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -44,10 +47,12 @@ std::string text(const nlohmann::json& v) {
 }
 
 // Renders a scenario of board/sim/scenarios/sci (NAME plus scene options) into dir/scene
-// and replays it with the likelihood tracker, the shipped gesture model and the
-// three-level SCI, no handle events, tracing to dir/trace.jsonl. Empty when both ran,
-// else the failing command's output.
-std::string replay_with_gestures(const fs::path& dir, const std::string& scenario) {
+// and replays it with the likelihood tracker, the shipped gesture model and the SCI in
+// `layout` (three-level unless said), with the handle `events` file (none unless said),
+// tracing to dir/trace.jsonl. Empty when both ran, else the failing command's output.
+std::string replay_with_gestures(const fs::path& dir, const std::string& scenario,
+                                 const std::string& layout = "three_level",
+                                 const std::string& events = "''") {
     const std::string src = ENDOTOWER_SOURCE_DIR;
     auto scene = run_endotower("scene --scenario " + src + "/board/sim/scenarios/sci/" + scenario +
                                " --out " + (dir / "scene").string());
@@ -55,11 +60,11 @@ std::string replay_with_gestures(const fs::path& dir, const std::string& scenari
     std::ofstream(dir / "board.yaml")
         << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
         << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
-        << "/board/sim/models/gestures.yml\nsci:\n  layout: three_level\n  media: " << src
+        << "/board/sim/models/gestures.yml\nsci:\n  layout: " << layout << "\n  media: " << src
         << "/board/sim/sci_media\n";
     auto sim =
         run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
-                      (dir / "scene/frames").string() + " --events '' --out " +
+                      (dir / "scene/frames").string() + " --events " + events + " --out " +
                       (dir / "o.avi").string() + " --trace " + (dir / "trace.jsonl").string());
     return sim.status == 0 ? std::string() : sim.output;
 }
@@ -175,6 +180,102 @@ TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
             << "frame " << frames;
     }
     EXPECT_EQ(frames, 60);
+    fs::remove_all(dir);
+}
+
+// Every frame of dir/trace.jsonl as a Step.
+std::vector<Step> read_steps(const fs::path& dir) {
+    std::vector<Step> every;
+    std::ifstream in(dir / "trace.jsonl");
+    for (std::string line; std::getline(in, line);) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        const nlohmann::json& s = j.at("sci");
+        every.push_back({j.at("frame").get<int>(), text(s.at("state")), text(s.at("menu")),
+                         text(s.at("highlighted")), text(s.at("event"))});
+    }
+    return every;
+}
+std::vector<Step> events_of(const std::vector<Step>& every) {
+    std::vector<Step> events;
+    for (const Step& s : every)
+        if (s.event != "-") events.push_back(s);
+    return events;
+}
+
+// Gesture commands (fig. 3.32, 3.33): board/sim/scenarios/sci/grasper_confirm.yaml, the
+// ring menu opened by the handle's button at frame 3; a grasper comes onto the MRI
+// sector (frames 10-20) and opens its jaws there, held still; from frame 55 its tip loops
+// once in 1.2 s. The open grasper held 1.0 s (25 frames from its arrival) selects MRI;
+// the loop confirms it within the 2 s: MRI's image viewer. No dwell click meanwhile (the
+// select comes before the 2 s dwell), nothing else.
+TEST(SciScenario, OpenGrasperSelectsAndALoopConfirms) {
+    const fs::path dir = temp_dir("confirm");
+    std::ofstream(dir / "events.txt") << "frame 3 press\nframe 4 release\n";
+    const std::string failed =
+        replay_with_gestures(dir, "grasper_confirm.yaml", "ring", (dir / "events.txt").string());
+    ASSERT_TRUE(failed.empty()) << failed;
+    const std::vector<Step> every = read_steps(dir), events = events_of(every);
+    ASSERT_EQ(every.size(), 92u);
+    ASSERT_EQ(events.size(), 4u) << ::testing::PrintToString(events);
+    const int h = events[1].frame, sel = events[2].frame, done = events[3].frame;
+    EXPECT_EQ(events[0], (Step{3, "menu", "main", "-", "activate_button"}));
+    EXPECT_EQ(events[1], (Step{h, "highlight", "main", "MRI", "highlight"}));
+    EXPECT_GE(h, 11);  // reached while moving in (frames 10-20)
+    EXPECT_LE(h, 20);
+    EXPECT_EQ(events[2], (Step{sel, "confirm", "main", "MRI", "select"}));
+    EXPECT_GE(sel, 45);  // the jaws open from frame 20: held 1.0 s
+    EXPECT_LE(sel, 47);
+    EXPECT_EQ(events[3], (Step{done, "menu", "viewer", "-", "confirm"}));
+    EXPECT_GT(done, 55);        // the loop begins at frame 55
+    EXPECT_LT(done, sel + 50);  // within the 2 s
+    for (int f = sel; f < done; ++f) EXPECT_EQ(every[f].state, "confirm") << "frame " << f;
+    fs::remove_all(dir);
+}
+
+// The same select, then a straight stroke across the item and back instead of a loop
+// (board/sim/scenarios/sci/grasper_deny.yaml): denied exactly 2.0 s (50 frames) after
+// the select, not at 1.96 s; nothing executed, the main menu stays, and the tip, back on
+// MRI, does not highlight it again until it has left.
+TEST(SciScenario, AStraightStrokeDeniesAfterTwoSeconds) {
+    const fs::path dir = temp_dir("deny");
+    std::ofstream(dir / "events.txt") << "frame 3 press\nframe 4 release\n";
+    const std::string failed =
+        replay_with_gestures(dir, "grasper_deny.yaml", "ring", (dir / "events.txt").string());
+    ASSERT_TRUE(failed.empty()) << failed;
+    const std::vector<Step> every = read_steps(dir), events = events_of(every);
+    ASSERT_EQ(every.size(), 100u);
+    ASSERT_EQ(events.size(), 4u) << ::testing::PrintToString(events);
+    const int sel = events[2].frame;
+    EXPECT_EQ(events[0], (Step{3, "menu", "main", "-", "activate_button"}));
+    EXPECT_EQ(events[1].event, "highlight");
+    EXPECT_EQ(events[1].highlighted, "MRI");
+    EXPECT_EQ(events[2], (Step{sel, "confirm", "main", "MRI", "select"}));
+    EXPECT_GE(sel, 45);
+    EXPECT_LE(sel, 47);
+    EXPECT_EQ(every[sel + 49], (Step{sel + 49, "confirm", "main", "MRI", "-"}));
+    EXPECT_EQ(events[3], (Step{sel + 50, "menu", "main", "-", "deny"}));
+    EXPECT_EQ(every.back(), (Step{99, "menu", "main", "-", "-"}));
+    fs::remove_all(dir);
+}
+
+// The cross as a command (fig. 3.34a; board/sim/scenarios/sci/cross_quadrant.yaml, no
+// handle events): two closed tools cross their jaws in the middle and hold still; the
+// quadrant menu opens 1.0 s after they came to rest (the tracked tips stop on frame 24
+// or 25), not while they were still moving into the cross. They part inside the menu's
+// free middle (no highlight), cross again, rest from frame 90: off 1.0 s later.
+TEST(SciScenario, ACrossHeldStillOpensTheQuadrantMenuAndAgainTurnsTheSciOff) {
+    const fs::path dir = temp_dir("cross");
+    const std::string failed = replay_with_gestures(dir, "cross_quadrant.yaml", "ring");
+    ASSERT_TRUE(failed.empty()) << failed;
+    const std::vector<Step> every = read_steps(dir), events = events_of(every);
+    ASSERT_EQ(every.size(), 120u);
+    ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
+    EXPECT_EQ(events[0], (Step{events[0].frame, "menu", "quadrant", "-", "quadrant"}));
+    EXPECT_GE(events[0].frame, 49);
+    EXPECT_LE(events[0].frame, 50);
+    EXPECT_EQ(events[1], (Step{events[1].frame, "inactive", "-", "-", "deactivate"}));
+    EXPECT_GE(events[1].frame, 114);
+    EXPECT_LE(events[1].frame, 115);
     fs::remove_all(dir);
 }
 
