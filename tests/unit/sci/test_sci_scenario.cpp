@@ -69,6 +69,31 @@ std::string replay_with_gestures(const fs::path& dir, const std::string& scenari
     return sim.status == 0 ? std::string() : sim.output;
 }
 
+// replay_with_gestures with the ring menu opened by the handle's button at frame 3.
+std::string replay_on_the_ring_after_the_button(const fs::path& dir, const std::string& scenario) {
+    std::ofstream(dir / "events.txt") << "frame 3 press\nframe 4 release\n";
+    return replay_with_gestures(dir, scenario, "ring", (dir / "events.txt").string());
+}
+
+// Every frame of dir/trace.jsonl as a Step.
+std::vector<Step> read_steps(const fs::path& dir) {
+    std::vector<Step> every;
+    std::ifstream in(dir / "trace.jsonl");
+    for (std::string line; std::getline(in, line);) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        const nlohmann::json& s = j.at("sci");
+        every.push_back({j.at("frame").get<int>(), text(s.at("state")), text(s.at("menu")),
+                         text(s.at("highlighted")), text(s.at("event"))});
+    }
+    return every;
+}
+std::vector<Step> events_of(const std::vector<Step>& every) {
+    std::vector<Step> events;
+    for (const Step& s : every)
+        if (s.event != "-") events.push_back(s);
+    return events;
+}
+
 TEST(SciScenario, RingMenuExactSequence) {
     const fs::path dir = temp_dir("ring");
     const std::string src = ENDOTOWER_SOURCE_DIR;
@@ -138,15 +163,7 @@ TEST(SciScenario, ScissorsHeldInTheActivationAreaActivateAfterThreeSeconds) {
     const fs::path dir = temp_dir("activation");
     const std::string failed = replay_with_gestures(dir, "scissors_activation.yaml --frames 100");
     ASSERT_TRUE(failed.empty()) << failed;
-    std::vector<Step> events;
-    std::ifstream in(dir / "trace.jsonl");
-    for (std::string line; std::getline(in, line);) {
-        const nlohmann::json j = nlohmann::json::parse(line);
-        const nlohmann::json& s = j["sci"];
-        const Step st{j["frame"].get<int>(), text(s["state"]), text(s["menu"]),
-                      text(s["highlighted"]), text(s["event"])};
-        if (st.event != "-") events.push_back(st);
-    }
+    const std::vector<Step> events = events_of(read_steps(dir));
     ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
     EXPECT_EQ(events[0].event, "activation_start");
     EXPECT_EQ(events[0].state, "activating");
@@ -183,25 +200,6 @@ TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
     fs::remove_all(dir);
 }
 
-// Every frame of dir/trace.jsonl as a Step.
-std::vector<Step> read_steps(const fs::path& dir) {
-    std::vector<Step> every;
-    std::ifstream in(dir / "trace.jsonl");
-    for (std::string line; std::getline(in, line);) {
-        const nlohmann::json j = nlohmann::json::parse(line);
-        const nlohmann::json& s = j.at("sci");
-        every.push_back({j.at("frame").get<int>(), text(s.at("state")), text(s.at("menu")),
-                         text(s.at("highlighted")), text(s.at("event"))});
-    }
-    return every;
-}
-std::vector<Step> events_of(const std::vector<Step>& every) {
-    std::vector<Step> events;
-    for (const Step& s : every)
-        if (s.event != "-") events.push_back(s);
-    return events;
-}
-
 // Gesture commands (fig. 3.32, 3.33): board/sim/scenarios/sci/grasper_confirm.yaml, the
 // ring menu opened by the handle's button at frame 3; a grasper comes onto the MRI
 // sector (frames 10-20) and opens its jaws there, held still; from frame 55 its tip loops
@@ -210,9 +208,7 @@ std::vector<Step> events_of(const std::vector<Step>& every) {
 // select comes before the 2 s dwell), nothing else.
 TEST(SciScenario, OpenGrasperSelectsAndALoopConfirms) {
     const fs::path dir = temp_dir("confirm");
-    std::ofstream(dir / "events.txt") << "frame 3 press\nframe 4 release\n";
-    const std::string failed =
-        replay_with_gestures(dir, "grasper_confirm.yaml", "ring", (dir / "events.txt").string());
+    const std::string failed = replay_on_the_ring_after_the_button(dir, "grasper_confirm.yaml");
     ASSERT_TRUE(failed.empty()) << failed;
     const std::vector<Step> every = read_steps(dir), events = events_of(every);
     ASSERT_EQ(every.size(), 92u);
@@ -238,9 +234,7 @@ TEST(SciScenario, OpenGrasperSelectsAndALoopConfirms) {
 // MRI, does not highlight it again until it has left.
 TEST(SciScenario, AStraightStrokeDeniesAfterTwoSeconds) {
     const fs::path dir = temp_dir("deny");
-    std::ofstream(dir / "events.txt") << "frame 3 press\nframe 4 release\n";
-    const std::string failed =
-        replay_with_gestures(dir, "grasper_deny.yaml", "ring", (dir / "events.txt").string());
+    const std::string failed = replay_on_the_ring_after_the_button(dir, "grasper_deny.yaml");
     ASSERT_TRUE(failed.empty()) << failed;
     const std::vector<Step> every = read_steps(dir), events = events_of(every);
     ASSERT_EQ(every.size(), 100u);
