@@ -15,11 +15,14 @@
 # for the loop its radius (3-5 mm) and duration (0.9-1.4 s). Prints one line per trial
 # and the success per kind; the time to select is from the frame the tool starts
 # towards the item to the frame its command takes effect (confirm or exit).
-# Usage: [ENDOTOWER=BINARY] toolchain/sci-gesture-commands.sh [OUT_DIR] [TRIALS]
+# Usage: [ENDOTOWER=BINARY] [FIRST=K] toolchain/sci-gesture-commands.sh [OUT_DIR] [TRIALS]
+# (FIRST: the trials K..K+TRIALS-1 instead of 1..TRIALS, another sample of poses)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_gestures}
 trials=${2:-30}
+first=${FIRST:-1}
+last=$((first + trials - 1))
 bin=${ENDOTOWER:-$root/build/release/firmware/endotower}
 mkdir -p "$out"
 cat > "$out/board.yaml" <<EOF
@@ -36,7 +39,7 @@ sci:
 EOF
 printf 'frame 3 press\nframe 4 release\n' > "$out/button.txt"
 
-for i in $(seq 1 "$trials"); do
+for i in $(seq "$first" "$last"); do
     t=$out/trial_$i
     if [ ! -f "$t.jsonl" ]; then
         mkdir -p "$t"
@@ -50,4 +53,4 @@ for i in $(seq 1 "$trials"); do
         rm -rf "$t/scene" "$t/o.avi"
     fi
 done
-python3 "$root/toolchain/sci_gesture_trial.py" score "$out" "$trials"
+python3 "$root/toolchain/sci_gesture_trial.py" score "$out" "$first" "$last"

@@ -3,7 +3,7 @@
 
   sci_gesture_trial.py scenario N   the scene of trial N (YAML on stdout)
   sci_gesture_trial.py kind N       confirm | deny | cross
-  sci_gesture_trial.py score DIR N  score DIR/trial_1..N.jsonl, one line each and a summary
+  sci_gesture_trial.py score DIR K N  score DIR/trial_K..N.jsonl, one line each and a summary
 
 Every draw comes from random.Random(N): the same trial is the same scene on every run.
 Targets are placed in displayed pixels with the scene's default camera (640x480,
@@ -26,6 +26,7 @@ K = [-0.32 / H**2, 0.06 / H**4]
 ITEMS = {"CT": -90, "X-RAY": 0, "MRI": 90, "EXIT": 180}
 RING_R = 0.355 * H  # inside the 0.30-0.40 H band; an open jaw's tip reads ~10 px nearer
 START_FRAMES, MOVE_FRAMES, HOLD_FRAMES = 10, 12, 35
+LOOP_FROM = START_FRAMES + MOVE_FRAMES + HOLD_FRAMES  # the loop or stroke begins
 
 
 def kind(n):
@@ -86,8 +87,17 @@ def scenario(n):
     start = to_mm(W / 2 + 0.06 * H * math.cos(phi), H / 2 + 0.06 * H * math.sin(phi), z)
     pivot = [round(110 * math.cos(phi), 1), round(110 * math.sin(phi), 1), 15]
     if k == "confirm":
-        radius = round(rnd.uniform(3, 5), 2)
-        then = "{loop: {radius_mm: %g, turns: 1}, frames: %d}" % (radius, rnd.randrange(23, 36))
+        # One turn through 12 points of a circle (radius 3-5 mm, 0.9-1.4 s) whose centre
+        # lies in a drawn direction from the tip, either way round.
+        radius, frames = rnd.uniform(3, 5), rnd.randrange(23, 36)
+        psi, sense = rnd.uniform(0, 2 * math.pi), rnd.choice([-1, 1])
+        centre = [target[0] + radius * math.cos(psi), target[1] + radius * math.sin(psi)]
+        steps = []
+        for j in range(1, 13):
+            a = psi + math.pi + sense * 2 * math.pi * j / 12
+            point = [round(centre[0] + radius * math.cos(a), 3), round(centre[1] + radius * math.sin(a), 3), target[2]]
+            steps.append("{move: %s, frames: %d}" % (fmt(point), frames * j // 12 - frames * (j - 1) // 12))
+        then = ", ".join(steps)
     else:  # a straight stroke across the item and back
         side = [round(target[0] - 8 * math.sin(th), 3), round(target[1] + 8 * math.cos(th), 3), target[2]]
         then = "{move: %s, frames: 15}, {move: %s, frames: 15}" % (fmt(side), fmt(target))
@@ -99,10 +109,10 @@ def scenario(n):
                           then, item)), item
 
 
-def score(folder, trials):
+def score(folder, first, last):
     ok = {"confirm": [0, 0], "deny": [0, 0], "cross": [0, 0]}
     times = {"confirm": [], "cross": []}
-    for n in range(1, trials + 1):
+    for n in range(first, last + 1):
         k = kind(n)
         item = scenario(n)[1]
         lines = [json.loads(l) for l in open("%s/trial_%d.jsonl" % (folder, n))]
@@ -124,8 +134,13 @@ def score(folder, trials):
             want = ["activate_button", "select", done if k == "confirm" else "deny"]
             sel = [e for e in ev if e[1] == "select"]
             good = names[:3] == want and sel[0][2] == item
-            if good and k == "confirm":
-                t = (ev[[e[1] for e in ev].index(done)][0] - START_FRAMES) / FPS
+            # A confirm before the loop began is the tip's jitter read as a loop.
+            at = ev[[e[1] for e in ev].index(names[2])][0] if good else 0
+            if good and k == "confirm" and at < LOOP_FROM:
+                good = False
+                note += "confirmed on frame %d, before the loop began" % at
+            elif good and k == "confirm":
+                t = (at - START_FRAMES) / FPS
                 times["confirm"].append(t)
                 note += "selected in %.2f s" % t
             elif good:
@@ -154,7 +169,7 @@ if __name__ == "__main__":
         sys.stdout.write(scenario(int(sys.argv[2]))[0])
     elif cmd == "kind":
         print(kind(int(sys.argv[2])))
-    elif cmd == "score" and len(sys.argv) == 4:
-        sys.exit(score(sys.argv[2], int(sys.argv[3])))
+    elif cmd == "score" and len(sys.argv) == 5:
+        sys.exit(score(sys.argv[2], int(sys.argv[3]), int(sys.argv[4])))
     else:
         sys.exit(__doc__)

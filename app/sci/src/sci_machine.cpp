@@ -47,7 +47,7 @@ void SciMachine::configure(int width, int height) {
 
 void SciMachine::open(MenuId m) {
     menu_ = m;
-    highlighted_ = hover_ = -1;
+    highlighted_ = hover_ = left_item_ = -1;
     rearm_ = true;
     wheel_highlight_ = false;
     go(SciState::kMenu);
@@ -57,13 +57,14 @@ void SciMachine::deactivate(std::string_view why) {
     event_ = why;
     depth_ = 0;
     menu_ = MenuId::kMain;
-    highlighted_ = hover_ = -1;
+    highlighted_ = hover_ = left_item_ = -1;
     box_.release();
     go(SciState::kInactive);
 }
 
 void SciMachine::click(int item) {
     event_ = "click";
+    left_item_ = -1;
     execute(menu().items[static_cast<std::size_t>(item)]);
 }
 
@@ -133,6 +134,8 @@ void SciMachine::point(const SciFrame& f) {
             dwell_start_ = f.t_ns;
             event_ = "highlight";
         } else if (!wheel_highlight_ && highlighted_ >= 0) {
+            left_item_ = highlighted_;
+            left_at_ = f.t_ns;
             highlighted_ = -1;
             event_ = "unhighlight";
         }
@@ -148,13 +151,21 @@ void SciMachine::point(const SciFrame& f) {
         }
     }
     // Open grasper held (the gesture fired): select, then wait for the loop (fig. 3.32).
-    if (highlighted_ >= 0 && f.gesture == SciGesture::kOpenGrasper && f.gesture_fired) {
-        confirm_item_ = highlighted_;
+    // The item is the one under the tip, or the one the tip left while the grasper was
+    // held still: the hold began on it.
+    const bool left_in_hold =
+        left_item_ >= 0 && !rearm_ && f.t_ns - left_at_ <= ms_to_ns(f.gesture_held_ms);
+    const int selected = highlighted_ >= 0 ? highlighted_ : left_in_hold ? left_item_ : -1;
+    if (selected >= 0 && f.gesture == SciGesture::kOpenGrasper && f.gesture_fired) {
+        highlighted_ = confirm_item_ = selected;
+        left_item_ = -1;
         confirm_start_ = f.t_ns;
         loop_turn_ = 0;
         loop_have_heading_ = false;
         loop_x_ = f.tool_count > 0 ? f.tools[0].x : 0;
         loop_y_ = f.tool_count > 0 ? f.tools[0].y : 0;
+        tip_count_ = tip_next_ = 0;  // the loop's path starts here
+        remember_tip(f);
         event_ = "select";
         go(SciState::kConfirm);
         return;
@@ -162,16 +173,37 @@ void SciMachine::point(const SciFrame& f) {
     go(highlighted_ >= 0 ? SciState::kHighlight : SciState::kMenu);
 }
 
+void SciMachine::remember_tip(const SciFrame& f) {
+    if (f.tool_count == 0) return;
+    tips_[static_cast<std::size_t>(tip_next_)] = {f.t_ns, f.tools[0].x, f.tools[0].y};
+    tip_next_ = (tip_next_ + 1) % static_cast<int>(tips_.size());
+    tip_count_ = std::min(tip_count_ + 1, static_cast<int>(tips_.size()));
+}
+
 void SciMachine::track_loop(const SciFrame& f) {
     if (f.tool_count == 0) return;
-    const double dx = f.tools[0].x - loop_x_, dy = f.tools[0].y - loop_y_;
-    // Steps shorter than 2 % of the height are jitter, not motion.
+    remember_tip(f);
+    // The loop is read on the tip's mean over the last kTipSmoothingNs: the tracked tip
+    // of open jaws jumps back and forth along the shaft by more than the jitter floor,
+    // and each jump turns the heading by about 180 degrees, which summed can make a
+    // "loop" of a straight stroke. A loop takes about a second; 160 ms barely shrinks it.
+    constexpr hal::Nanos kTipSmoothingNs = 160'000'000;
+    double sx = 0, sy = 0;
+    int n = 0;
+    for (int k = 0; k < tip_count_; ++k) {
+        const TipSample& s = tips_[static_cast<std::size_t>(k)];
+        if (f.t_ns - s.t >= kTipSmoothingNs) continue;
+        sx += s.x, sy += s.y, ++n;
+    }
+    const double x = sx / n, y = sy / n;
+    const double dx = x - loop_x_, dy = y - loop_y_;
+    // Steps of the mean shorter than 2 % of the height are jitter, not motion.
     if (std::hypot(dx, dy) < 0.02 * height_) return;
     const double heading = std::atan2(dy, dx) * 180.0 / 3.14159265358979323846;
     if (loop_have_heading_) loop_turn_ += wrap_deg(heading - loop_heading_);
     loop_heading_ = heading;
     loop_have_heading_ = true;
-    loop_x_ = f.tools[0].x, loop_y_ = f.tools[0].y;
+    loop_x_ = x, loop_y_ = y;
 }
 
 void SciMachine::functions(const SciFrame& f) {
@@ -335,7 +367,7 @@ void SciMachine::step(const SciFrame& f) {
             } else if (f.t_ns - confirm_start_ >= ms_to_ns(params_.confirm_ms)) {
                 // Denied: the tip must leave the item before it can be chosen again.
                 event_ = "deny";
-                highlighted_ = hover_ = -1;
+                highlighted_ = hover_ = left_item_ = -1;
                 rearm_ = true;
                 go(SciState::kMenu);
             }

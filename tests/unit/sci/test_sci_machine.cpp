@@ -200,7 +200,7 @@ TEST(SciMachine, OpenGrasperSelectsAndALoopConfirms) {
 }
 
 // A small loop (12 px radius: a 3 mm circle at 85 mm depth at 480 rows) still confirms:
-// its steps of 10.5 px pass the 2 % jitter floor (9.6 px) and turn 52 degrees each.
+// its steps of 10.5 px pass the jitter floor, also on the 160 ms mean, and turn 52 degrees each.
 TEST(SciMachine, ASmallLoopConfirms) {
     Driver d;
     d.press(0, 320, 240);
@@ -217,6 +217,84 @@ TEST(SciMachine, ASmallLoopConfirms) {
         if (d.event() == "confirm") confirmed = d.menu();
     }
     EXPECT_EQ(confirmed, "3d_effects");
+}
+
+// The tip read back and forth (an open grasper's tracked tip jumps between the jaw ends
+// and the head by more than the jitter floor): every step nearly reverses the
+// heading, by +170 degrees here. Summed step by step, two such steps made 340 degrees, a
+// "loop" (rendered deny trials confirmed so, toolchain/sci-gesture-commands.sh); on the
+// tip's 160 ms mean the jumps are no motion: deny.
+TEST(SciMachine, ATipJumpingBackAndForthIsNoLoop) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    ASSERT_EQ(d.m.state(), SciState::kConfirm);
+    double px = x, py = y;
+    for (int k = 1; k < 50; ++k) {
+        const double a = k * 170.0 * M_PI / 180;
+        px += 11 * std::cos(a), py += 11 * std::sin(a);
+        d.frame(1000 * kMs + k * 40 * kMs, px, py);
+        ASSERT_EQ(d.m.state(), SciState::kConfirm) << "frame " << k;
+    }
+    d.frame(3000 * kMs, x, y);
+    EXPECT_EQ(d.event(), "deny");
+}
+
+// A deny, then the same item selected again: the second loop is read on its own path.
+TEST(SciMachine, AfterADenyASecondSelectAndLoopConfirms) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    for (int k = 1; k <= 50; ++k) d.frame(1000 * kMs + k * 40 * kMs, x + 0.5 * k, y);
+    ASSERT_EQ(d.event(), "deny");
+    d.frame(3100 * kMs, x + 0.3 * kW, y);  // away, and back onto the item
+    d.frame(3140 * kMs, x, y);
+    ASSERT_EQ(d.lit(), "3-D effects");
+    d.frame(4140 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    ASSERT_EQ(d.event(), "select");
+    hal::Nanos t = 4140 * kMs;
+    std::string confirmed;
+    for (int k = 1; k <= 30 && confirmed.empty(); ++k) {
+        t += 40 * kMs;
+        const double a = k * 12.0 * M_PI / 180;
+        d.frame(t, x + 40 * std::sin(a), y - 40 * (1 - std::cos(a)));
+        if (d.event() == "confirm") confirmed = d.menu();
+    }
+    EXPECT_EQ(confirmed, "3d_effects");
+}
+
+// Opening the jaws moves the tracked tip back towards the head, here off the item the
+// surgeon holds the tool on: the open grasper whose hold began on the item selects it.
+TEST(SciMachine, OpenGrasperSelectsTheItemItsHoldBeganOn) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    ASSERT_EQ(d.lit(), "3-D effects");
+    d.frame(80 * kMs, x + 0.3 * kW, y, SciGesture::kOpenGrasper, 0);
+    EXPECT_EQ(d.event(), "unhighlight");
+    d.frame(1080 * kMs, x + 0.3 * kW, y, SciGesture::kOpenGrasper, 1000, true);
+    EXPECT_EQ(d.event(), "select");
+    EXPECT_EQ(d.lit(), "3-D effects");
+    EXPECT_EQ(d.m.state(), SciState::kConfirm);
+}
+
+// But not an item the tip had left before the hold began (40 ms before, here).
+TEST(SciMachine, OpenGrasperDoesNotSelectAnItemLeftBeforeItsHold) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.frame(40 * kMs, x, y);
+    d.frame(80 * kMs, x + 0.3 * kW, y);
+    EXPECT_EQ(d.event(), "unhighlight");
+    d.frame(120 * kMs, x + 0.3 * kW, y, SciGesture::kOpenGrasper, 0);
+    d.frame(1120 * kMs, x + 0.3 * kW, y, SciGesture::kOpenGrasper, 1000, true);
+    EXPECT_EQ(d.event(), "");
+    EXPECT_EQ(d.m.state(), SciState::kMenu);
 }
 
 TEST(SciMachine, AnyOtherMotionDeniesAfterTwoSeconds) {

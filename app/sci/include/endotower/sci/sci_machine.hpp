@@ -18,7 +18,7 @@
 // command; docs/sci.md "False activations").
 // event() names what happened this frame (docs/sci.md lists them), or is empty.
 // Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
-// hold 1000 ms, confirm window 2000 ms, loop 300 deg of turning, activation area the
+// hold 1000 ms, confirm window 2000 ms, loop 270 deg of turning, activation area the
 // bottom 20 % x middle 40 % of the frame. No allocation after configure().
 #pragma once
 
@@ -65,7 +65,10 @@ struct SciFrame {
 struct SciParams {
     SciLayout layout = SciLayout::kThreeLevel;
     double dwell_ms = 2000, activation_hold_ms = 3000, cross_hold_ms = 1000, confirm_ms = 2000;
-    double loop_deg = 300;
+    // Turning of the tip's 160 ms mean that confirms: one turn read in steps of at least
+    // 2 % of the height measures about 280-345 degrees (360 less the first step's angle,
+    // large on a small loop); a stroke back is one reversal, 180.
+    double loop_deg = 270;
     double still_fraction = 0.03;  // of the width: a tool's tip "still" during a cross hold
     double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
     std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)
@@ -113,6 +116,7 @@ private:
     void point(const SciFrame& f);
     void functions(const SciFrame& f);
     void track_loop(const SciFrame& f);
+    void remember_tip(const SciFrame& f);
     bool cross_held(const SciFrame& f);
 
     SciParams params_;
@@ -145,6 +149,17 @@ private:
     int confirm_item_ = -1;
     double loop_x_ = 0, loop_y_ = 0, loop_heading_ = 0, loop_turn_ = 0;
     bool loop_have_heading_ = false;
+    // The cursor's recent tips: the loop is followed on their mean over kTipSmoothingNs.
+    struct TipSample {
+        hal::Nanos t = 0;
+        double x = 0, y = 0;
+    };
+    std::array<TipSample, 16> tips_{};
+    int tip_count_ = 0, tip_next_ = 0;
+    // The item the tip last left and when: the open grasper's hold that began on it
+    // selects it (opening the jaws moves the tracked tip back towards the head).
+    int left_item_ = -1;
+    hal::Nanos left_at_ = 0;
     // functions
     SciModality modality_ = SciModality::kCt;
     int image_ = 0;
