@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The trials of toolchain/sci-gesture-commands.sh (docs/sci.md "Gesture commands").
+"""The trials of toolchain/sci-gesture-commands.sh (docs/sci.md "Gesture commands at drawn poses").
 
   sci_gesture_trial.py scenario N   the scene of trial N (YAML on stdout)
   sci_gesture_trial.py kind N       confirm | deny | cross
@@ -65,7 +65,7 @@ def scenario(n):
         a0, b0 = [cx + 8, cy + 6 * side, z], [cx - 8, cy + 6 * side, z + 3]
         ap, bp = [cx + 4, cy + 4 * side, z], [cx - 4, cy + 4 * side, z + 3]
 
-        def motion(p, p0, pp):
+        def motion(p, pp):
             return ("[{dwell: 10}, {move: %s, frames: 15}, {dwell: 40}, {move: %s, frames: 10}, "
                     "{dwell: 10}, {move: %s, frames: 10}, {dwell: 55}]" % (fmt(p), fmt(pp), fmt(p)))
 
@@ -74,8 +74,8 @@ def scenario(n):
             "  - {diameter_mm: 5, tip: scissors, jaw: closed, pivot_mm: [90, %d, 20], start: {tip_mm: %s},\n"
             "     motion: %s}\n"
             "  - {diameter_mm: %d, tip: grasper, jaw: closed, pivot_mm: [-90, %d, 25], start: {tip_mm: %s},\n"
-            "     motion: %s}\n" % (60 * side, fmt(a0), motion(a, a0, ap), d2, 60 * side, fmt(b0),
-                                    motion(b, b0, bp))), "-"
+            "     motion: %s}\n" % (60 * side, fmt(a0), motion(a, ap), d2, 60 * side, fmt(b0),
+                                    motion(b, bp))), "-"
     item = rnd.choice(sorted(ITEMS))
     z = rnd.uniform(55, 85)
     d = rnd.choice([5, 10])
