@@ -49,6 +49,17 @@ struct Driver {
         return m.highlighted() < 0 ? "" : std::string(m.menu().items[m.highlighted()].label);
     }
     std::string event() const { return std::string(m.event()); }
+    // The tip loops from (x, y), one frame each 40 ms, `step_deg` of the circle of
+    // `radius` px a frame, for at most `frames` frames: the menu the confirm opened (the
+    // time is then in t), or "" when none came.
+    std::string loop(double x, double y, double radius, double step_deg, int frames) {
+        for (int k = 1; k <= frames; ++k) {
+            const double a = k * step_deg * M_PI / 180;
+            frame(t + 40 * kMs, x + radius * std::sin(a), y - radius * (1 - std::cos(a)));
+            if (event() == "confirm") return menu();
+        }
+        return "";
+    }
     // The centre of item `label` of the current menu.
     std::pair<double, double> at(const std::string& label) const {
         for (std::size_t k = 0; k < m.menu().count; ++k) {
@@ -187,16 +198,8 @@ TEST(SciMachine, OpenGrasperSelectsAndALoopConfirms) {
     EXPECT_EQ(d.event(), "select");
     EXPECT_EQ(d.m.state(), SciState::kConfirm);
     // A circle of radius 40 px in 1.2 s (30 frames, 12 degrees each).
-    hal::Nanos t = 1000 * kMs;
-    std::string confirmed;
-    for (int k = 1; k <= 30 && confirmed.empty(); ++k) {
-        t += 40 * kMs;
-        const double a = k * 12.0 * M_PI / 180;
-        d.frame(t, x + 40 * std::sin(a), y - 40 * (1 - std::cos(a)));
-        if (d.event() == "confirm") confirmed = d.menu();
-    }
-    EXPECT_EQ(confirmed, "3d_effects");
-    EXPECT_LT(t, 3000 * kMs);
+    EXPECT_EQ(d.loop(x, y, 40, 12, 30), "3d_effects");
+    EXPECT_LT(d.t, 3000 * kMs);
 }
 
 // A small loop (12 px radius: a 3 mm circle at 85 mm depth at 480 rows) still confirms:
@@ -208,15 +211,7 @@ TEST(SciMachine, ASmallLoopConfirms) {
     d.frame(40 * kMs, x, y);
     d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
     ASSERT_EQ(d.m.state(), SciState::kConfirm);
-    hal::Nanos t = 1000 * kMs;
-    std::string confirmed;
-    for (int k = 1; k <= 14 && confirmed.empty(); ++k) {
-        t += 40 * kMs;
-        const double a = k * 52.0 * M_PI / 180;
-        d.frame(t, x + 12 * std::sin(a), y - 12 * (1 - std::cos(a)));
-        if (d.event() == "confirm") confirmed = d.menu();
-    }
-    EXPECT_EQ(confirmed, "3d_effects");
+    EXPECT_EQ(d.loop(x, y, 12, 52, 14), "3d_effects");
 }
 
 // The tip read back and forth (an open grasper's tracked tip jumps between the jaw ends
@@ -256,15 +251,7 @@ TEST(SciMachine, AfterADenyASecondSelectAndLoopConfirms) {
     ASSERT_EQ(d.lit(), "3-D effects");
     d.frame(4140 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
     ASSERT_EQ(d.event(), "select");
-    hal::Nanos t = 4140 * kMs;
-    std::string confirmed;
-    for (int k = 1; k <= 30 && confirmed.empty(); ++k) {
-        t += 40 * kMs;
-        const double a = k * 12.0 * M_PI / 180;
-        d.frame(t, x + 40 * std::sin(a), y - 40 * (1 - std::cos(a)));
-        if (d.event() == "confirm") confirmed = d.menu();
-    }
-    EXPECT_EQ(confirmed, "3d_effects");
+    EXPECT_EQ(d.loop(x, y, 40, 12, 30), "3d_effects");
 }
 
 // Opening the jaws moves the tracked tip back towards the head, here off the item the
