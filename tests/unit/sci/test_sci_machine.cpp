@@ -49,6 +49,15 @@ struct Driver {
         return m.highlighted() < 0 ? "" : std::string(m.menu().items[m.highlighted()].label);
     }
     std::string event() const { return std::string(m.event()); }
+    // Activates by the button, rests the tip on item `label` and fires the open grasper's
+    // 1 s hold there (t = 1 s): the select. Returns the item's centre.
+    std::pair<double, double> select(const std::string& label) {
+        press(0, kW / 2.0, kH / 2.0);
+        const auto [x, y] = at(label);
+        frame(40 * kMs, x, y);
+        frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+        return {x, y};
+    }
     // The tip loops from (x, y), one frame each 40 ms, `step_deg` of the circle of
     // `radius` px a frame, for at most `frames` frames: the menu the confirm opened (the
     // time is then in t), or "" when none came.
@@ -191,10 +200,7 @@ TEST(SciMachine, MovingTheScissorsRestartsTheActivation) {
 // Open grasper on a highlighted item selects; a loop of the tip within 2 s confirms.
 TEST(SciMachine, OpenGrasperSelectsAndALoopConfirms) {
     Driver d;
-    d.press(0, 320, 240);
-    const auto [x, y] = d.at("3-D effects");
-    d.frame(40 * kMs, x, y);
-    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    const auto [x, y] = d.select("3-D effects");
     EXPECT_EQ(d.event(), "select");
     EXPECT_EQ(d.m.state(), SciState::kConfirm);
     // A circle of radius 40 px in 1.2 s (30 frames, 12 degrees each).
@@ -206,10 +212,7 @@ TEST(SciMachine, OpenGrasperSelectsAndALoopConfirms) {
 // its steps of 10.5 px pass the jitter floor, also on the 160 ms mean, and turn 52 degrees each.
 TEST(SciMachine, ASmallLoopConfirms) {
     Driver d;
-    d.press(0, 320, 240);
-    const auto [x, y] = d.at("3-D effects");
-    d.frame(40 * kMs, x, y);
-    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    const auto [x, y] = d.select("3-D effects");
     ASSERT_EQ(d.m.state(), SciState::kConfirm);
     EXPECT_EQ(d.loop(x, y, 12, 52, 14), "3d_effects");
 }
@@ -221,10 +224,7 @@ TEST(SciMachine, ASmallLoopConfirms) {
 // tip's 160 ms mean the jumps are no motion: deny.
 TEST(SciMachine, ATipJumpingBackAndForthIsNoLoop) {
     Driver d;
-    d.press(0, 320, 240);
-    const auto [x, y] = d.at("3-D effects");
-    d.frame(40 * kMs, x, y);
-    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    const auto [x, y] = d.select("3-D effects");
     ASSERT_EQ(d.m.state(), SciState::kConfirm);
     double px = x, py = y;
     for (int k = 1; k < 50; ++k) {
@@ -240,10 +240,7 @@ TEST(SciMachine, ATipJumpingBackAndForthIsNoLoop) {
 // A deny, then the same item selected again: the second loop is read on its own path.
 TEST(SciMachine, AfterADenyASecondSelectAndLoopConfirms) {
     Driver d;
-    d.press(0, 320, 240);
-    const auto [x, y] = d.at("3-D effects");
-    d.frame(40 * kMs, x, y);
-    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    const auto [x, y] = d.select("3-D effects");
     for (int k = 1; k <= 50; ++k) d.frame(1000 * kMs + k * 40 * kMs, x + 0.5 * k, y);
     ASSERT_EQ(d.event(), "deny");
     d.frame(3100 * kMs, x + 0.3 * kW, y);  // away, and back onto the item
@@ -286,10 +283,7 @@ TEST(SciMachine, OpenGrasperDoesNotSelectAnItemLeftBeforeItsHold) {
 
 TEST(SciMachine, AnyOtherMotionDeniesAfterTwoSeconds) {
     Driver d;
-    d.press(0, 320, 240);
-    const auto [x, y] = d.at("3-D effects");
-    d.frame(40 * kMs, x, y);
-    d.frame(1000 * kMs, x, y, SciGesture::kOpenGrasper, 1000, true);
+    const auto [x, y] = d.select("3-D effects");
     // A straight stroke to the right and back: no loop.
     for (int k = 1; k < 50; ++k)
         d.frame(1000 * kMs + k * 40 * kMs, x + 4.0 * (k < 25 ? k : 50 - k), y);
