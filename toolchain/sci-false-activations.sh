@@ -10,14 +10,25 @@
 # each (default 125 = 5 s at 25 fps; longer than the 3 s hold), and SURGERY chunks of
 # board/sim/scenarios/surgery_motion.yaml (two tools working, crossing, holding; 1500
 # frames = 60 s each, seeds 1..SURGERY; frames deleted after the replay, traces kept).
-# Usage: [ENDOTOWER=BINARY] [SURGERY=N | SEEDS="K ..."] toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
-# (SEEDS: those surgery chunks instead of 1..N)
+# Usage: [ENDOTOWER=BINARY] [SURGERY=N | SEEDS="K ..."] [GESTURES=MODEL] [SCENES=DIR]
+#        toolchain/sci-false-activations.sh [OUT_DIR] [FRAMES]
+# (SEEDS: those surgery chunks instead of 1..N; GESTURES: a gesture model to measure
+# instead of the shipped one)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_false}
 frames=${2:-125}
 bin=${ENDOTOWER:-$root/build/release/firmware/endotower}
 mkdir -p "$out"
+# The sim board, or the same with another gesture model (GESTURES=MODEL) to measure.
+board=$root/board/sim/board.yaml
+if [ -n "${GESTURES:-}" ]; then
+    board=$out/board.yaml
+    sed -e "s|^\(    model: \)models/gestures.yml|\1$(realpath "$GESTURES")|" \
+        -e "s|: models/|: $root/board/sim/models/|; s|: sci_media|: $root/board/sim/sci_media|" \
+        -e "s|: media/|: $root/board/sim/media/|" \
+        "$root/board/sim/board.yaml" > "$board"
+fi
 inputs=()
 data=$root/../shared/data/sznitman_lap/frames
 if [ -d "$data" ]; then inputs+=("sznitman_lap=$data"); else echo "skip: $data absent"; fi
@@ -28,8 +39,11 @@ for s in t41_speed_0_4 t41_speed_4_8 t41_speed_8_up t41_distractors t41_light_0_
     inputs+=("$s=$out/scene_$s/frames")
 done
 seeds=${SEEDS:-$(seq 1 "${SURGERY:-0}")}
+# SCENES=DIR keeps the rendered chunks there (650 MB each; rendering is 85 % of a
+# chunk's time), so another model is measured on the same frames by replays alone.
+scenes=${SCENES:-$out}
 for k in $seeds; do
-    inputs+=("surgery_$k=$out/scene_surgery_$k/frames")
+    inputs+=("surgery_$k=$scenes/scene_surgery_$k/frames")
 done
 total_s=0
 total_act=0
@@ -37,18 +51,18 @@ printf "%-20s %8s %12s %12s %16s  %s\n" input seconds activations near_misses lo
 for entry in "${inputs[@]}"; do
     name=${entry%%=*}
     input=${entry#*=}
-    if [[ $name == surgery_* && -f $out/$name.jsonl.sum ]]; then
-        read -r s a < "$out/$name.jsonl.sum"   # already replayed (its frames are gone)
+    if [[ -f $out/$name.jsonl.sum ]]; then
+        read -r s a < "$out/$name.jsonl.sum"   # already replayed (a surgery chunk's frames may be gone)
         total_s=$(python3 -c "print($total_s + $s)")
         total_act=$((total_act + a))
         continue
     fi
-    if [[ $name == surgery_* ]]; then
+    if [[ $name == surgery_* && ! -f $scenes/scene_$name/truth.jsonl ]]; then
         "$bin" scene --scenario "$root/board/sim/scenarios/surgery_motion.yaml" --seed "${name#surgery_}" --frames 1500 \
-            --out "$out/scene_$name" >/dev/null
+            --out "$scenes/scene_$name" >/dev/null
     fi
-    "$bin" sim --board "$root/board/sim/board.yaml" --input "$input" --events "" --out "$out/$name.avi" \
-        --trace "$out/$name.jsonl" >/dev/null
+    # Only the trace (no video encoded): the activations are read from it.
+    "$bin" sim --board "$board" --input "$input" --events "" --trace "$out/$name.jsonl" >/dev/null
     python3 - "$out/$name.jsonl" "$name" <<'PY'
 import json, sys
 lines = [json.loads(l) for l in open(sys.argv[1])]
@@ -72,7 +86,7 @@ print("%-20s %8.2f %12d %12d %16.2f  %s" % (sys.argv[2], secs, act, near, longes
       " ".join("%s=%d" % kv for kv in sorted(fired.items())) or "-"))
 open(sys.argv[1] + ".sum", "w").write("%f %d\n" % (secs, act))
 PY
-    [[ $name == surgery_* ]] && rm -rf "$out/scene_$name" "$out/$name.avi"
+    [[ $name == surgery_* && -z ${SCENES:-} ]] && rm -rf "$out/scene_$name"
     read -r s a < "$out/$name.jsonl.sum"
     total_s=$(python3 -c "print($total_s + $s)")
     total_act=$((total_act + a))

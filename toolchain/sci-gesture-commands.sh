@@ -15,8 +15,10 @@
 # for the loop its radius (3-5 mm) and duration (0.9-1.4 s). Prints one line per trial
 # and the success per kind; the time to select is from the frame the tool starts
 # towards the item to the frame its command takes effect (confirm or exit).
-# Usage: [ENDOTOWER=BINARY] [FIRST=K] toolchain/sci-gesture-commands.sh [OUT_DIR] [TRIALS]
-# (FIRST: the trials K..K+TRIALS-1 instead of 1..TRIALS, another sample of poses)
+# Usage: [ENDOTOWER=BINARY] [FIRST=K] [GESTURES=MODEL] [KIND=K] toolchain/sci-gesture-commands.sh [OUT_DIR] [TRIALS]
+# (FIRST: the trials K..K+TRIALS-1 instead of 1..TRIALS, another sample of poses;
+# GESTURES: a gesture model to measure instead of the shipped one; KIND: only the
+# trials of that kind, confirm, deny or cross, are run)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_gestures}
@@ -32,7 +34,7 @@ analysis:
   tracker: likelihood
   tool_model: $root/board/sim/models/tool_likelihood.bin
   gestures:
-    model: $root/board/sim/models/gestures.yml
+    model: ${GESTURES:-$root/board/sim/models/gestures.yml}
 sci:
   layout: ring
   media: $root/board/sim/sci_media
@@ -40,6 +42,9 @@ EOF
 printf 'frame 3 press\nframe 4 release\n' > "$out/button.txt"
 
 for i in $(seq "$first" "$last"); do
+    if [ -n "${KIND:-}" ] && [ "$(python3 "$root/toolchain/sci_gesture_trial.py" kind "$i")" != "$KIND" ]; then
+        continue
+    fi
     t=$out/trial_$i
     if [ ! -f "$t.jsonl" ]; then
         mkdir -p "$t"
@@ -47,10 +52,11 @@ for i in $(seq "$first" "$last"); do
         events=$(python3 "$root/toolchain/sci_gesture_trial.py" kind "$i")
         [ "$events" = cross ] && events="" || events=$out/button.txt
         "$bin" scene --scenario "$t/scenario.yaml" --out "$t/scene" > /dev/null
+        # Only the trace: the command is read from it (no video is encoded).
         "$bin" sim --board "$out/board.yaml" --input "$t/scene/frames" --events "$events" \
-            --out "$t/o.avi" --trace "$t.jsonl.part" > /dev/null
+            --trace "$t.jsonl.part" > /dev/null
         mv "$t.jsonl.part" "$t.jsonl"
-        rm -rf "$t/scene" "$t/o.avi"
+        rm -rf "$t/scene"
     fi
 done
 python3 "$root/toolchain/sci_gesture_trial.py" score "$out" "$first" "$last"

@@ -11,6 +11,7 @@ drivers/scene/src/camera.cpp) and turned into millimetres at the drawn depth.
 """
 import json
 import math
+import os
 import random
 import sys
 
@@ -114,8 +115,11 @@ def score(folder, first, last):
     times = {"confirm": [], "cross": []}
     for n in range(first, last + 1):
         k = kind(n)
+        path = "%s/trial_%d.jsonl" % (folder, n)
+        if not os.path.exists(path):  # not run (KIND= runs one kind)
+            continue
         item = scenario(n)[1]
-        lines = [json.loads(l) for l in open("%s/trial_%d.jsonl" % (folder, n))]
+        lines = [json.loads(l) for l in open(path)]
         ev = [(l["frame"], l["sci"]["event"], l["sci"]["highlighted"]) for l in lines if l["sci"]["event"]]
         names = [e[1] for e in ev if e[1] not in ("highlight", "unhighlight")]
         flicker = sum(e[1] == "unhighlight" for e in ev)

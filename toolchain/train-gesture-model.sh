@@ -6,9 +6,11 @@
 # two networks, the single-tool one also trained on single_*.yaml (the SCI's
 # activation pose; docs/gestures.md, "Two networks"), and with the profile features
 # the single-tool and profile networks on more_single_*.yaml too (three times the
-# random single-tool poses; "Profile"). The fig322/fig323/fig312 suites at their own seeds and
-# test_random* are the held-out test sets (docs/gestures.md). Deterministic: same
-# bytes every run.
+# random single-tool poses; "Profile"); with the profile features a second stage then
+# trains the two-tool network alone, by RPROP, on crossings from every side
+# (varied_double_*.yaml; "Crossings from every side"). The fig322/fig323/fig312 suites
+# at their own seeds and test_* are the held-out test sets (docs/gestures.md).
+# Deterministic: same bytes every run.
 # Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended|topology|profile]
 #        [--segmentation likelihood|morphology] [--test DIR]...  (default: the shipped model)
 set -euo pipefail
@@ -51,4 +53,33 @@ case " $* " in
     ;;
 esac
 mkdir -p "$(dirname "$out")"
-"$bin" train-gestures "${args[@]}" --tool-model "$root/board/sim/models/tool_likelihood.bin" --out "$out" "$@"
+tool_model=$root/board/sim/models/tool_likelihood.bin
+# Stage 1: every network, training regions labelled by the fixed match distance
+# (--match-widths 0), as the models before 2026-11-27 (evening) were trained.
+case " $* " in
+  *" profile "*) first=$(mktemp "${TMPDIR:-/tmp}/gestures-stage1.XXXXXX") ;;
+  *) first=$out ;;
+esac
+"$bin" train-gestures "${args[@]}" --match-widths 0 --tool-model "$tool_model" --out "$first" "$@"
+case " $* " in
+  *" profile "*)
+    # Stage 2 (the shipped profile model): the two-tool network trained anew on the
+    # crossings from incisions on every side, with 5 and 10 mm graspers (varied_double_*),
+    # three times fig. 3.23's random crossings (more_double_*) and the activation pose's
+    # scissors and graspers (single_activation_*: one tool that enters twice is not a
+    # two-tool gesture); the single-tool and profile networks stay stage 1's
+    # (docs/gestures.md, "Crossings from every side").
+    two=()
+    for f in "$root"/board/sim/scenarios/gestures/varied_double_*.yaml "$root"/board/sim/scenarios/gestures/more_double_*.yaml; do
+      s=$(basename "$f" .yaml)
+      [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+      two+=(--two-tool-scene "$work/$s")
+    done
+    two+=(--two-tool-scene "$work/single_activation_scissors" --two-tool-scene "$work/single_activation_grasper")
+    scenes=()
+    for f in "$root"/board/sim/scenarios/gestures/train_*.yaml; do scenes+=(--scene "$work/$(basename "$f" .yaml)"); done
+    "$bin" train-gestures --two-tool-only-from "$first" --rprop "${scenes[@]}" "${two[@]}" \
+      --tool-model "$tool_model" --out "$out" "$@"
+    rm -f "$first"
+    ;;
+esac

@@ -1,5 +1,6 @@
 #include "gesture_dataset.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -11,7 +12,8 @@ namespace endotower::firmware {
 
 bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segmenter, int every,
                          std::vector<vision::GestureSample>& out, GestureDatasetStats& stats,
-                         std::string& error, double match_fraction, bool reject) {
+                         std::string& error, double match_fraction, bool reject,
+                         double match_widths) {
     namespace fs = std::filesystem;
     const fs::path truth_path = fs::path(dir) / "truth.jsonl", frames = fs::path(dir) / "frames";
     if (!fs::is_directory(frames)) {
@@ -42,17 +44,24 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
         }
         const std::size_t n = segmenter.segment(f, blobs);
         ++stats.frames;
-        const double near = match_fraction * img.cols;
+        // A tool's tip matches a blob's within the fraction of the frame width or, for a
+        // tool drawn larger than that, twice its width (the book's tracking rule): an open
+        // 10 mm grasper near the scope reaches its farthest jaw end, the blob's tip, 60-80 px
+        // from the truth's tip between the jaws (docs/gestures.md, "Tools from anywhere").
+        auto near = [&](const eval::TruthTool& tool) {
+            return std::max(match_fraction * img.cols, match_widths * tool.width_px);
+        };
         for (std::size_t b = 0; b < n; ++b) {
             ++stats.blobs;
             int label = -1;
             if (t.gesture && (blobs[b].entries == 2 || n == 1)) {
                 label = vision::gesture_label_index(*t.gesture);
             } else if (!t.gesture) {
-                double best = near;
+                double best = 1.0;  // the nearest tip, as a share of its match distance
                 for (const eval::TruthTool& tool : t.tools) {
                     const double d =
-                        std::hypot(tool.tip_px.x - blobs[b].tip.x, tool.tip_px.y - blobs[b].tip.y);
+                        std::hypot(tool.tip_px.x - blobs[b].tip.x, tool.tip_px.y - blobs[b].tip.y) /
+                        near(tool);
                     if (tool.visible && !tool.gesture.empty() && d < best)
                         best = d, label = vision::gesture_label_index(tool.gesture);
                 }
@@ -61,9 +70,9 @@ bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segme
                 // Far from every tool: tissue the segmentation took for a tool.
                 bool far = true;
                 for (const eval::TruthTool& tool : t.tools)
-                    far = far &&
-                          (!tool.visible || std::hypot(tool.tip_px.x - blobs[b].tip.x,
-                                                       tool.tip_px.y - blobs[b].tip.y) > 3 * near);
+                    far = far && (!tool.visible ||
+                                  std::hypot(tool.tip_px.x - blobs[b].tip.x,
+                                             tool.tip_px.y - blobs[b].tip.y) > 3 * near(tool));
                 if (far) label = vision::kNotATool;
             }
             if (label < 0) {

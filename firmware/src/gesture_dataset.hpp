@@ -6,7 +6,9 @@
 // Per used frame (every `every`-th), the segmenter's blobs get the truth's label:
 // the frame's two-tool `gesture` for a blob that enters the picture twice (or the only
 // blob), else the single-tool `gesture` of the visible tool whose tip_px is nearest
-// the blob's tip, within `match_fraction` (0.08) x frame width. Blobs without a label
+// the blob's tip, within `match_fraction` (0.08) x frame width or `match_widths` (2) x
+// the tool's width_px, whichever is larger (nearest in units of that distance; 0 widths:
+// the fraction alone, the rule before 2026-11-27). Blobs without a label
 // are skipped (counted in `unlabelled`), except, with `reject`, those farther than
 // 3 x that distance from every visible tool's tip: vision::kNotATool (tissue taken
 // for a tool). Errors name the file.
@@ -25,6 +27,7 @@ struct GestureDatasetStats {
 
 bool add_gesture_samples(const std::string& dir, vision::GestureSegmenter& segmenter, int every,
                          std::vector<vision::GestureSample>& out, GestureDatasetStats& stats,
-                         std::string& error, double match_fraction = 0.08, bool reject = false);
+                         std::string& error, double match_fraction = 0.08, bool reject = false,
+                         double match_widths = 2.0);
 
 }  // namespace endotower::firmware

@@ -1,6 +1,7 @@
 // endotower train-gestures: trains the tool-gesture classifier (book ch. 3) from
 // labelled recordings and writes the model file atomically; --test scores it on
-// held-out recordings (per tip region, before the hold-still rule).
+// held-out recordings (per tip region, before the hold-still rule); --model scores a
+// model file that exists instead of training one.
 #include <cstdio>
 #include <cstdlib>
 
@@ -20,9 +21,12 @@ void print_help() {
         "likelihood|morphology]\n"
         "                                [--tool-model FILE] [--every N] [--hidden N] "
         "[--iterations N]\n"
-        "                                [--networks one|two]\n\n"
+        "                                [--networks one|two] [--rprop] [--match-widths N]\n"
+        "                                [--two-tool-only-from MODEL]\n"
+        "       endotower train-gestures --model FILE --test DIR... [--tool-model FILE]\n\n"
         "Trains the gesture network (docs/gestures.md) on the tip regions of labelled\n"
-        "recordings and writes the model file atomically.\n\n"
+        "recordings and writes the model file atomically; with --model, measures a\n"
+        "model file on the --test recordings instead (nothing is trained or written).\n\n"
         "  --scene DIR        training recording: DIR/frames/*.png and DIR/truth.jsonl (the "
         "output\n"
         "                     of 'endotower scene', or a hand-labelled clip in that layout)\n"
@@ -47,8 +51,17 @@ void print_help() {
         "                     also from the --two-tool-scene ones\n"
         "  --single-tool-scene DIR  a recording for the single-tool network only (two)\n"
         "  --two-tool-scene DIR     a recording for the two-tool network only (two)\n"
-        "  --out FILE         the model file (e.g. board/sim/models/gestures.yml)\n\n"
-        "Exit status: 0 written, 1 could not train or write, 2 bad usage or input.\n");
+        "  --out FILE         the model file (e.g. board/sim/models/gestures.yml)\n"
+        "  --model FILE       measure this model (its features and segmentation) on --test\n"
+        "  --match-widths N   a training region takes the label of the tool whose tip is\n"
+        "                     within 0.08 x the frame width or N x the tool's width of its\n"
+        "                     tip (default 2; 0: the fraction alone); --test always 2\n"
+        "  --rprop            train by RPROP (batch; the result does not depend on the\n"
+        "                     order of the samples) instead of sequential backpropagation\n"
+        "  --two-tool-only-from FILE  train only the two-tool network; the single-tool\n"
+        "                     and profile networks are this model's, unchanged\n\n"
+        "Exit status: 0 written (or measured), 1 could not train or write, 2 bad usage or\n"
+        "input.\n");
 }
 
 int usage_error(const std::string& m) {
@@ -63,112 +76,9 @@ bool whole(const std::string& v, long lo, long hi, long& out) {
     return !v.empty() && *end == 0 && out >= lo && out <= hi;
 }
 
-}  // namespace
-
-int run_train_gestures_command(const Args& args) {
-    std::vector<std::string> scenes, single_scenes, two_scenes, tests;
-    std::string out, tool_model_path;
-    vision::GestureTrainParams params;
-    params.features = vision::GestureFeatureSet::kTopology;
-    long every = 1, hidden = 20, iterations = 3000;
-    for (std::size_t i = 0; i < args.size(); ++i) {
-        const std::string& k = args[i];
-        if (k == "--help" || k == "-h") {
-            print_help();
-            return kExitOk;
-        }
-        if (i + 1 >= args.size()) return usage_error("option " + k + " needs a value");
-        const std::string& v = args[++i];
-        if (k == "--scene")
-            scenes.push_back(v);
-        else if (k == "--single-tool-scene")
-            single_scenes.push_back(v);
-        else if (k == "--two-tool-scene")
-            two_scenes.push_back(v);
-        else if (k == "--test")
-            tests.push_back(v);
-        else if (k == "--out")
-            out = v;
-        else if (k == "--tool-model")
-            tool_model_path = v;
-        else if (k == "--features") {
-            if (v != "book" && v != "extended" && v != "topology" && v != "profile")
-                return usage_error(
-                    "--features: expected book, extended, topology or profile, got '" + v + "'");
-            params.features = v == "book"       ? vision::GestureFeatureSet::kBook
-                              : v == "extended" ? vision::GestureFeatureSet::kExtended
-                              : v == "topology" ? vision::GestureFeatureSet::kTopology
-                                                : vision::GestureFeatureSet::kProfile;
-        } else if (k == "--segmentation") {
-            if (v != "likelihood" && v != "morphology")
-                return usage_error("--segmentation: expected likelihood or morphology, got '" + v +
-                                   "'");
-            params.segmentation = v == "morphology" ? vision::GestureSegmentation::kMorphology
-                                                    : vision::GestureSegmentation::kLikelihood;
-        } else if (k == "--every") {
-            if (!whole(v, 1, 100000, every))
-                return usage_error("--every needs a whole number >= 1, got '" + v + "'");
-        } else if (k == "--hidden") {
-            if (!whole(v, 2, vision::kGestureMaxHidden, hidden))
-                return usage_error("--hidden needs a whole number in 2.." +
-                                   std::to_string(vision::kGestureMaxHidden) + ", got '" + v + "'");
-        } else if (k == "--networks") {
-            if (v != "one" && v != "two")
-                return usage_error("--networks: expected one or two, got '" + v + "'");
-            params.two_tool_network = v == "two";
-        } else if (k == "--iterations") {
-            if (!whole(v, 1, 1000000, iterations))
-                return usage_error("--iterations needs a whole number >= 1, got '" + v + "'");
-        } else
-            return usage_error("unknown option '" + k + "'");
-    }
-    if (out.empty()) return usage_error("give --out FILE");
-    if (scenes.empty()) return usage_error("give at least one --scene DIR");
-    params.hidden = static_cast<int>(hidden);
-    params.iterations = static_cast<int>(iterations);
-    std::string error;
-    vision::ToolLikelihood tool_model;
-    if (params.segmentation == vision::GestureSegmentation::kLikelihood) {
-        if (tool_model_path.empty())
-            return usage_error("likelihood segmentation needs --tool-model FILE");
-        if (!tool_model.load(tool_model_path, error)) return usage_error(error);
-    }
-    vision::GestureSegmenterParams seg_params;
-    seg_params.method = params.segmentation;
-    seg_params.profile = params.features == vision::GestureFeatureSet::kProfile;
-    vision::GestureSegmenter segmenter(&tool_model, seg_params);
-
-    std::vector<vision::GestureSample> samples;
-    GestureDatasetStats stats;
-    for (const std::string& d : scenes)
-        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
-                                 params.features != vision::GestureFeatureSet::kBook))
-            return usage_error(error);
-    if (!single_scenes.empty() && !params.two_tool_network)
-        return usage_error("--single-tool-scene needs --networks two");
-    if (!two_scenes.empty() && !params.two_tool_network)
-        return usage_error("--two-tool-scene needs --networks two");
-    for (const bool single : {true, false})
-        for (const std::string& d : single ? single_scenes : two_scenes) {
-            const std::size_t from = samples.size();
-            if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error,
-                                     0.08, true))
-                return usage_error(error);
-            for (std::size_t i = from; i < samples.size(); ++i)
-                (single ? samples[i].single_tool_only : samples[i].two_tool_only) = true;
-        }
-    std::array<int, vision::kGestureLabelCount + 1> per_class{};
-    for (const auto& s : samples) ++per_class[s.label];
-    std::printf("train-gestures: %d frames, %d tip regions, %d unlabelled, %zu samples:",
-                stats.frames, stats.blobs, stats.unlabelled, samples.size());
-    for (int c = 0; c < vision::kGestureLabelCount; ++c)
-        std::printf(" %s %d", vision::kGestureLabels[c], per_class[c]);
-    std::printf(" not_a_tool %d\n", per_class[vision::kNotATool]);
-    vision::GestureClassifier classifier;
-    if (!classifier.train(samples, params, error)) {
-        std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());
-        return kExitFailure;
-    }
+// Per held-out recording: the per-gesture accuracy on its tip regions and the wrong calls.
+int print_tests(const vision::GestureClassifier& classifier, vision::GestureSegmenter& segmenter,
+                const std::vector<std::string>& tests, std::string& error) {
     for (const std::string& d : tests) {
         std::vector<vision::GestureSample> held_out;
         GestureDatasetStats ts;
@@ -200,6 +110,153 @@ int run_train_gestures_command(const Args& args) {
                 }
         std::printf("\n");
     }
+    return kExitOk;
+}
+
+}  // namespace
+
+int run_train_gestures_command(const Args& args) {
+    std::vector<std::string> scenes, single_scenes, two_scenes, tests;
+    std::string out, tool_model_path, model_path, base_path;
+    vision::GestureTrainParams params;
+    params.features = vision::GestureFeatureSet::kTopology;
+    long every = 1, hidden = 20, iterations = 3000, match_widths = 2;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& k = args[i];
+        if (k == "--help" || k == "-h") {
+            print_help();
+            return kExitOk;
+        }
+        if (k == "--rprop") {
+            params.rprop = true;
+            continue;
+        }
+        if (i + 1 >= args.size()) return usage_error("option " + k + " needs a value");
+        const std::string& v = args[++i];
+        if (k == "--scene")
+            scenes.push_back(v);
+        else if (k == "--single-tool-scene")
+            single_scenes.push_back(v);
+        else if (k == "--two-tool-scene")
+            two_scenes.push_back(v);
+        else if (k == "--test")
+            tests.push_back(v);
+        else if (k == "--out")
+            out = v;
+        else if (k == "--model")
+            model_path = v;
+        else if (k == "--two-tool-only-from")
+            base_path = v;
+        else if (k == "--tool-model")
+            tool_model_path = v;
+        else if (k == "--features") {
+            if (v != "book" && v != "extended" && v != "topology" && v != "profile")
+                return usage_error(
+                    "--features: expected book, extended, topology or profile, got '" + v + "'");
+            params.features = v == "book"       ? vision::GestureFeatureSet::kBook
+                              : v == "extended" ? vision::GestureFeatureSet::kExtended
+                              : v == "topology" ? vision::GestureFeatureSet::kTopology
+                                                : vision::GestureFeatureSet::kProfile;
+        } else if (k == "--segmentation") {
+            if (v != "likelihood" && v != "morphology")
+                return usage_error("--segmentation: expected likelihood or morphology, got '" + v +
+                                   "'");
+            params.segmentation = v == "morphology" ? vision::GestureSegmentation::kMorphology
+                                                    : vision::GestureSegmentation::kLikelihood;
+        } else if (k == "--every") {
+            if (!whole(v, 1, 100000, every))
+                return usage_error("--every needs a whole number >= 1, got '" + v + "'");
+        } else if (k == "--hidden") {
+            if (!whole(v, 2, vision::kGestureMaxHidden, hidden))
+                return usage_error("--hidden needs a whole number in 2.." +
+                                   std::to_string(vision::kGestureMaxHidden) + ", got '" + v + "'");
+        } else if (k == "--networks") {
+            if (v != "one" && v != "two")
+                return usage_error("--networks: expected one or two, got '" + v + "'");
+            params.two_tool_network = v == "two";
+        } else if (k == "--match-widths") {
+            if (!whole(v, 0, 100, match_widths))
+                return usage_error("--match-widths needs a whole number 0..100, got '" + v + "'");
+        } else if (k == "--iterations") {
+            if (!whole(v, 1, 1000000, iterations))
+                return usage_error("--iterations needs a whole number >= 1, got '" + v + "'");
+        } else
+            return usage_error("unknown option '" + k + "'");
+    }
+    vision::GestureClassifier classifier;
+    std::string error;
+    if (!model_path.empty()) {
+        // Measure a model that exists (the shipped one) on the --test recordings, no training.
+        if (!scenes.empty() || !single_scenes.empty() || !two_scenes.empty() || !out.empty())
+            return usage_error("--model measures a model: give only --test DIR and --tool-model");
+        if (tests.empty()) return usage_error("--model needs at least one --test DIR");
+        if (!classifier.load(model_path, error)) return usage_error(error);
+        params.features = classifier.features();
+        params.segmentation = classifier.segmentation();
+    } else {
+        if (out.empty()) return usage_error("give --out FILE");
+        if (scenes.empty()) return usage_error("give at least one --scene DIR");
+    }
+    if (!base_path.empty()) {
+        // Only the two-tool network is trained; the single-tool ones are the base's.
+        if (!model_path.empty() || !single_scenes.empty())
+            return usage_error(
+                "--two-tool-only-from trains the two-tool network: no --model or "
+                "--single-tool-scene");
+        if (!classifier.load(base_path, error)) return usage_error(error);
+        if (!classifier.has_two_tool_network())
+            return usage_error(base_path + ": has no two-tool network (--networks two)");
+        params.features = classifier.features();
+        params.segmentation = classifier.segmentation();
+        params.two_tool_network = true;
+    }
+    params.hidden = static_cast<int>(hidden);
+    params.iterations = static_cast<int>(iterations);
+    vision::ToolLikelihood tool_model;
+    if (params.segmentation == vision::GestureSegmentation::kLikelihood) {
+        if (tool_model_path.empty())
+            return usage_error("likelihood segmentation needs --tool-model FILE");
+        if (!tool_model.load(tool_model_path, error)) return usage_error(error);
+    }
+    vision::GestureSegmenterParams seg_params;
+    seg_params.method = params.segmentation;
+    seg_params.profile = params.features == vision::GestureFeatureSet::kProfile;
+    vision::GestureSegmenter segmenter(&tool_model, seg_params);
+
+    if (!model_path.empty()) return print_tests(classifier, segmenter, tests, error);
+    std::vector<vision::GestureSample> samples;
+    GestureDatasetStats stats;
+    for (const std::string& d : scenes)
+        if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error, 0.08,
+                                 params.features != vision::GestureFeatureSet::kBook,
+                                 static_cast<double>(match_widths)))
+            return usage_error(error);
+    if (!single_scenes.empty() && !params.two_tool_network)
+        return usage_error("--single-tool-scene needs --networks two");
+    if (!two_scenes.empty() && !params.two_tool_network)
+        return usage_error("--two-tool-scene needs --networks two");
+    for (const bool single : {true, false})
+        for (const std::string& d : single ? single_scenes : two_scenes) {
+            const std::size_t from = samples.size();
+            if (!add_gesture_samples(d, segmenter, static_cast<int>(every), samples, stats, error,
+                                     0.08, true, static_cast<double>(match_widths)))
+                return usage_error(error);
+            for (std::size_t i = from; i < samples.size(); ++i)
+                (single ? samples[i].single_tool_only : samples[i].two_tool_only) = true;
+        }
+    std::array<int, vision::kGestureLabelCount + 1> per_class{};
+    for (const auto& s : samples) ++per_class[s.label];
+    std::printf("train-gestures: %d frames, %d tip regions, %d unlabelled, %zu samples:",
+                stats.frames, stats.blobs, stats.unlabelled, samples.size());
+    for (int c = 0; c < vision::kGestureLabelCount; ++c)
+        std::printf(" %s %d", vision::kGestureLabels[c], per_class[c]);
+    std::printf(" not_a_tool %d\n", per_class[vision::kNotATool]);
+    if (!(base_path.empty() ? classifier.train(samples, params, error)
+                            : classifier.retrain_two_tool(samples, params, error))) {
+        std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());
+        return kExitFailure;
+    }
+    if (const int rc = print_tests(classifier, segmenter, tests, error); rc != kExitOk) return rc;
     if (!system::write_file_atomic(out, classifier.serialise(), error)) {
         std::fprintf(stderr, "endotower train-gestures: %s\n", error.c_str());
         return kExitFailure;

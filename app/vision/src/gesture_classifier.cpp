@@ -1,6 +1,7 @@
 #include "endotower/vision/gesture_classifier.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <cinttypes>
 #include <cstdio>
 #include <fstream>
@@ -133,7 +134,13 @@ cv::Ptr<cv::ml::ANN_MLP> train_network(const std::vector<GestureSample>& samples
         cv::Ptr<cv::ml::ANN_MLP> ann = cv::ml::ANN_MLP::create();
         ann->setLayerSizes(cv::Mat_<int>({1, 3}, {nf, params.hidden, classes}));
         ann->setActivationFunction(cv::ml::ANN_MLP::SIGMOID_SYM, 0, 0);
-        ann->setTrainMethod(cv::ml::ANN_MLP::BACKPROP, 0.05, 0.1);
+        // RPROP (batch) learns the same network whatever the order of the samples; the
+        // book's sequential backpropagation does not (docs/gestures.md, "Crossings from
+        // every side").
+        if (params.rprop)
+            ann->setTrainMethod(cv::ml::ANN_MLP::RPROP, 0.1, FLT_EPSILON);
+        else
+            ann->setTrainMethod(cv::ml::ANN_MLP::BACKPROP, 0.05, 0.1);
         ann->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS,
                                               params.iterations, 1e-7));
         if (!ann->train(cv::ml::TrainData::create(x, cv::ml::ROW_SAMPLE, y))) {
@@ -180,6 +187,24 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
     net_->profile = profile;
     features_ = params.features;
     segmentation_ = params.segmentation;
+    return true;
+}
+
+bool GestureClassifier::retrain_two_tool(const std::vector<GestureSample>& samples,
+                                         const GestureTrainParams& params, std::string& error) {
+    if (!has_two_tool_network()) {
+        error = "the model has no two-tool network to retrain";
+        return false;
+    }
+    if (params.features != features_ || params.segmentation != segmentation_) {
+        error = "the samples' features or segmentation are not the model's";
+        return false;
+    }
+    const cv::Ptr<cv::ml::ANN_MLP> two = train_network(
+        samples, [](const GestureSample& s) { return !s.single_tool_only; }, params,
+        GestureFeatures::count(base_feature_set(features_)), " (two-tool network)", error);
+    if (two.empty()) return false;
+    net_->two_tool = two;
     return true;
 }
 

@@ -5,10 +5,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "endotower/eval/truth.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
 #include "gesture_dataset.hpp"
 
@@ -99,13 +103,38 @@ TEST_F(Gestures, ShippedModelMeetsTheSingleToolGoalOnHeldOutSuites) {
     for (int c = 0; c < 4; ++c) EXPECT_GE(rate[c], 0.95) << vision::kGestureLabels[c];
 }
 
+// The line `train-gestures` printed for one --test recording ("test DIR: ...").
+std::string test_line(const std::string& printed, const fs::path& recording) {
+    const std::size_t at = printed.find("test " + recording.string() + ":");
+    return at == std::string::npos ? "" : printed.substr(at, printed.find('\n', at) - at);
+}
+
 TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
     const fs::path train = scene("fig322_grasper_orientations.yaml", "--seed 77");
     const fs::path model = dir() / "m.yml";
     ASSERT_EQ(run("train-gestures --scene " + train.string() + " --tool-model " + kModels +
-                  "tool_likelihood.bin --iterations 200 --features book --out " + model.string()),
+                  "tool_likelihood.bin --iterations 200 --features book --out " + model.string() +
+                  " --test " + train.string()),
               0)
         << slurp(dir() / "out.err");
+    // --model measures the written model: the same line as the training run's --test.
+    const std::string trained = test_line(slurp(dir() / "out.txt"), train);
+    EXPECT_NE(trained.find("open_grasper "), std::string::npos) << trained;
+    const auto written = fs::last_write_time(model);
+    ASSERT_EQ(run("train-gestures --model " + model.string() + " --tool-model " + kModels +
+                  "tool_likelihood.bin --test " + train.string()),
+              0)
+        << slurp(dir() / "out.err");
+    EXPECT_EQ(test_line(slurp(dir() / "out.txt"), train), trained);
+    EXPECT_EQ(fs::last_write_time(model), written);
+    EXPECT_EQ(run("train-gestures --model " + model.string() + " --scene " + train.string() +
+                  " --test " + train.string()),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err").find("--model measures a model"), std::string::npos);
+    EXPECT_EQ(run("train-gestures --model " + (dir() / "absent.yml").string() + " --test " +
+                  train.string()),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err").find("absent.yml"), std::string::npos);
     vision::GestureClassifier c;
     std::string error;
     ASSERT_TRUE(c.load(model.string(), error)) << error;
@@ -120,6 +149,53 @@ TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
     EXPECT_NE(
         slurp(dir() / "out.err").find("--features: expected book, extended, topology or profile"),
         std::string::npos);
+}
+
+TEST_F(Gestures, AnOpenTenMillimetreGrasperIsLabelledByItsWidth) {
+    // An open 10 mm grasper at a roll (test_varied_single_grasper's first pose): the
+    // segmenter's tip is the farther jaw's end, 58 px from the truth's tip between the
+    // jaws, past 0.08 x 640 = 51.2 px but within twice the tool's width (67 px). Before
+    // the width rule such regions went unlabelled and no network learnt them.
+    fs::create_directories(dir());
+    const fs::path yaml = dir() / "open10.yaml", rec = dir() / "open10";
+    std::ofstream(yaml) << "name: open10\ndescription: a 10 mm grasper open, then closed\n"
+                           "frames: 2\ntools:\n  - diameter_mm: 10\n    tip: grasper\n"
+                           "    jaw: open\n    pivot_mm: [77.8, 77.8, 15]\n"
+                           "    start: {tip_mm: [-13.3, 4.8, 70.6]}\n    motion:\n"
+                           "      - {move: [-13.3, 4.8, 70.6], frames: 0, roll_deg: -32.8}\n"
+                           "      - {dwell: 1}\n      - {dwell: 1, jaw: closed}\n";
+    ASSERT_EQ(run("scene --scenario " + yaml.string() + " --out " + rec.string(), "scene"), 0)
+        << slurp(dir() / "scene.err");
+    vision::ToolLikelihood tool_model;
+    std::string error;
+    ASSERT_TRUE(tool_model.load(kModels + "tool_likelihood.bin", error)) << error;
+    vision::GestureSegmenterParams p;
+    p.profile = true;
+    vision::GestureSegmenter segmenter(&tool_model, p);
+    std::vector<vision::GestureSample> samples;
+    firmware::GestureDatasetStats stats;
+    ASSERT_TRUE(firmware::add_gesture_samples(rec.string(), segmenter, 1, samples, stats, error))
+        << error;
+    EXPECT_EQ(stats.frames, 2);
+    EXPECT_EQ(stats.unlabelled, 0);
+    ASSERT_EQ(samples.size(), 2U);
+    EXPECT_EQ(samples[0].label, vision::gesture_label_index("open_grasper"));
+    EXPECT_EQ(samples[1].label, vision::gesture_label_index("closed_grasper"));
+    // The case the rule is for: the open jaws' region tip lies past the fixed distance.
+    cv::Mat img = cv::imread((rec / "frames" / "000000.png").string(), cv::IMREAD_COLOR);
+    ASSERT_FALSE(img.empty());
+    hal::Frame f;
+    f.format = {img.cols, img.rows, static_cast<int>(img.step), hal::PixelFormat::kBgr24};
+    f.data = img.data;
+    segmenter.configure(f.format);
+    std::array<vision::GestureBlob, vision::GestureSegmenter::kMaxBlobs> blobs{};
+    ASSERT_EQ(segmenter.segment(f, blobs), 1U);
+    std::vector<eval::TruthFrame> truth;
+    ASSERT_TRUE(eval::read_truth((rec / "truth.jsonl").string(), truth, error)) << error;
+    const auto& tool = truth[0].tools[0];
+    const double d = std::hypot(blobs[0].tip.x - tool.tip_px.x, blobs[0].tip.y - tool.tip_px.y);
+    EXPECT_GT(d, 0.08 * img.cols);
+    EXPECT_LT(d, 2 * tool.width_px);
 }
 
 namespace {

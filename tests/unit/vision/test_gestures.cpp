@@ -619,6 +619,49 @@ TEST(GestureClassifier, TwoToolOnlySamplesLeaveTheSingleToolNetworkAsItWas) {
     EXPECT_LT(before_right, static_cast<int>(added.size()));
 }
 
+// retrain_two_tool: a model's two-tool network trained anew on other crossings, its
+// single-tool network kept: every single-tool call the same bytes, the new pose
+// learnt; refused for a model without a two-tool network or for other features.
+TEST(GestureClassifier, RetrainingTheTwoToolNetworkKeepsTheSingleToolNetwork) {
+    std::vector<GestureSample> samples = synthetic_samples(12);
+    for (GestureSample& s : samples) s.entries = s.label >= 4 ? 2 : 1;
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kExtended;
+    p.iterations = 2000;
+    p.two_tool_network = true;
+    std::string error;
+    GestureClassifier before;
+    ASSERT_TRUE(before.train(samples, p, error)) << error;
+    GestureClassifier c;
+    ASSERT_TRUE(c.parse(before.serialise(), "before", error)) << error;
+    std::vector<GestureSample> crossings, added;
+    for (GestureSample s : synthetic_samples(12)) {
+        if (s.label < 4) continue;
+        if (s.label == 6) {  // a new crossing pose of the triangle
+            s.features.compactness += 9, s.features.elongation += 9, s.label = 5;
+            added.push_back(s);
+        }
+        crossings.push_back(s);
+    }
+    // The single-tool samples are left out on purpose: they must not matter.
+    ASSERT_TRUE(c.retrain_two_tool(crossings, p, error)) << error;
+    EXPECT_EQ(expect_same_calls(c, before, samples, 1), 48);
+    int learned = 0;
+    for (const auto& s : added) learned += c.classify(s.features, 2).label == 5;
+    EXPECT_EQ(learned, static_cast<int>(added.size()));
+    EXPECT_NE(c.serialise(), before.serialise());
+
+    p.features = GestureFeatureSet::kTopology;
+    EXPECT_FALSE(c.retrain_two_tool(crossings, p, error));
+    EXPECT_NE(error.find("not the model's"), std::string::npos) << error;
+    p.features = GestureFeatureSet::kExtended;
+    p.two_tool_network = false;
+    GestureClassifier one;
+    ASSERT_TRUE(one.train(samples, p, error)) << error;
+    EXPECT_FALSE(one.retrain_two_tool(crossings, p, error));
+    EXPECT_NE(error.find("no two-tool network"), std::string::npos) << error;
+}
+
 TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
     // A pinkish lit field with a dark shaft from the right border ending in two jaws.
     const int W = 640, H = 480;

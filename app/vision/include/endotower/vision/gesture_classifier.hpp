@@ -83,6 +83,7 @@ struct GestureTrainParams {
     int hidden = 20;
     int iterations = 3000;
     bool two_tool_network = false;  // a second network for two-tool regions (extended)
+    bool rprop = false;  // RPROP (batch) instead of the book's sequential backpropagation
 };
 
 constexpr int kNotATool = kGestureLabelCount;  // the extended classifier's eighth class
@@ -110,6 +111,11 @@ public:
 
     bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
                std::string& error);
+    // Trains the two-tool network anew (samples not single_tool_only) and keeps the
+    // single-tool and profile networks as they are: a trained two-network model, the
+    // same features and segmentation in `params`.
+    bool retrain_two_tool(const std::vector<GestureSample>& samples,
+                          const GestureTrainParams& params, std::string& error);
     // `entries`: the region's rim entries; 2 uses the two-tool network when there is one.
     GestureResult classify(const GestureFeatures& f, int entries = 1) const;
     bool has_two_tool_network() const;
