@@ -61,8 +61,8 @@ for entry in "${inputs[@]}"; do
         "$bin" scene --scenario "$root/board/sim/scenarios/surgery_motion.yaml" --seed "${name#surgery_}" --frames 1500 \
             --out "$scenes/scene_$name" >/dev/null
     fi
-    # Only the trace (no video encoded): the activations are read from it.
-    "$bin" sim --board "$board" --input "$input" --events "" --trace "$out/$name.jsonl" >/dev/null
+    "$bin" sim --board "$board" --input "$input" --events "" --out "$out/$name.avi" \
+        --trace "$out/$name.jsonl" >/dev/null
     python3 - "$out/$name.jsonl" "$name" <<'PY'
 import json, sys
 lines = [json.loads(l) for l in open(sys.argv[1])]
@@ -86,6 +86,7 @@ print("%-20s %8.2f %12d %12d %16.2f  %s" % (sys.argv[2], secs, act, near, longes
       " ".join("%s=%d" % kv for kv in sorted(fired.items())) or "-"))
 open(sys.argv[1] + ".sum", "w").write("%f %d\n" % (secs, act))
 PY
+    [[ $name == surgery_* ]] && rm -f "$out/$name.avi"
     [[ $name == surgery_* && -z ${SCENES:-} ]] && rm -rf "$out/scene_$name"
     read -r s a < "$out/$name.jsonl.sum"
     total_s=$(python3 -c "print($total_s + $s)")

@@ -52,11 +52,10 @@ for i in $(seq "$first" "$last"); do
         events=$(python3 "$root/toolchain/sci_gesture_trial.py" kind "$i")
         [ "$events" = cross ] && events="" || events=$out/button.txt
         "$bin" scene --scenario "$t/scenario.yaml" --out "$t/scene" > /dev/null
-        # Only the trace: the command is read from it (no video is encoded).
         "$bin" sim --board "$out/board.yaml" --input "$t/scene/frames" --events "$events" \
-            --trace "$t.jsonl.part" > /dev/null
+            --out "$t/o.avi" --trace "$t.jsonl.part" > /dev/null
         mv "$t.jsonl.part" "$t.jsonl"
-        rm -rf "$t/scene"
+        rm -rf "$t/scene" "$t/o.avi"
     fi
 done
 python3 "$root/toolchain/sci_gesture_trial.py" score "$out" "$first" "$last"

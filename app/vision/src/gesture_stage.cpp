@@ -9,26 +9,38 @@ GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns,
     const auto near = [still_px](Point2 a, Point2 b) {
         return std::hypot(a.x - b.x, a.y - b.y) <= still_px;
     };
-    // A new hold; `frames` of it already seen (a pending label's run), all agreeing.
-    const auto restart = [&](int l, Point2 at, hal::Nanos since, int frames) {
+    const auto ms = [](hal::Nanos d) { return static_cast<double>(d) / 1e6; };
+    // A new hold; `frames` of it already seen (a pending label's run), `agreed` of them
+    // showing it.
+    const auto restart = [&](int l, Point2 at, hal::Nanos since, int frames, int agreed) {
         label_ = l, anchor_ = seen_ = at, start_ns_ = since, agreed_ns_ = t_ns, fired_ = false;
-        pending_ = -1, frames_ = agreed_ = frames;
+        pending_ = kNoPending, frames_ = frames, agreed_ = agreed;
     };
     if (label == label_ && label >= 0) {
         if (near(where, anchor_))
-            agreed_ns_ = t_ns, seen_ = where, pending_ = -1, ++frames_, ++agreed_;
+            agreed_ns_ = t_ns, seen_ = where, pending_ = kNoPending, ++frames_, ++agreed_;
         else
-            restart(label, where, t_ns, 1);  // moved: a new hold
+            restart(label, where, t_ns, 1, 1);  // moved: a new hold
     } else if (label_ < 0) {
-        restart(label, where, t_ns, 1);
+        restart(label, where, t_ns, 1, 1);
     } else {
-        // Another label (or none): the new one's hold dates from its first frame.
+        // Another label (or none): the hold goes on for dropout_ms. The new label's hold
+        // dates from its first frame, through frames of no gesture of its own: one such
+        // frame in the new label's first 200 ms no longer restarts it; a third label
+        // does (docs/gestures.md, "A new label's dropouts").
         ++frames_;
-        if (label != pending_ || (label >= 0 && !near(where, pending_anchor_)))
-            pending_ = label, pending_anchor_ = where, pending_ns_ = t_ns, pending_frames_ = 0;
-        ++pending_frames_;
-        if (static_cast<double>(t_ns - agreed_ns_) / 1e6 > params_.dropout_ms)
-            restart(label, pending_anchor_, pending_ns_, pending_frames_);
+        if (pending_ != kNoPending && label == pending_ &&
+            (label < 0 || near(where, pending_anchor_))) {
+            pending_seen_ns_ = t_ns, ++pending_frames_, ++pending_agreed_;
+        } else if (pending_ >= 0 && label < 0 &&
+                   ms(t_ns - pending_seen_ns_) <= params_.dropout_ms) {
+            ++pending_frames_;  // a frame with no gesture inside the new label's run
+        } else {
+            pending_ = label, pending_anchor_ = where, pending_ns_ = pending_seen_ns_ = t_ns;
+            pending_frames_ = pending_agreed_ = 1;
+        }
+        if (ms(t_ns - agreed_ns_) > params_.dropout_ms)
+            restart(pending_, pending_anchor_, pending_ns_, pending_frames_, pending_agreed_);
     }
     State s;
     // Not held while fewer than min_support of its frames show it.

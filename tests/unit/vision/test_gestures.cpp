@@ -238,6 +238,51 @@ TEST(GestureHold, ShortDropoutsKeepTheHoldARealChangeDatesFromItsFirstFrame) {
     }
 }
 
+// A new label misread in a frame of its own first 200 ms (fig. 3.23's trials: a double
+// triangle held, then a cross read in frames 270-273, none in 274, a cross again): its
+// hold still dates from its first frame and fires 1.0 s after it, not 1.0 s after the
+// misread frame. Before, the misread frame restarted the new label's run, and the cross
+// fired 1.2 s after the tools crossed, in the next trial.
+TEST(GestureHold, ANewLabelsHoldDatesFromItsFirstFrameThroughItsOwnDropouts) {
+    GestureHold hold({1000.0, 0.03, 200.0});
+    const hal::Nanos frame = 40'000'000;  // 25 fps
+    int fired_at = -1;
+    for (int i = 0; i < 80; ++i) {
+        // Label 6 for 30 frames; then label 4 from frame 30, none in 34 and 37.
+        const int label = i < 30 ? 6 : (i == 34 || i == 37) ? -1 : 4;
+        const GestureHold::State s = hold.update(label, {100.0, 50.0}, i * frame, 5.0);
+        if (i < 35) {
+            EXPECT_EQ(s.label, 6) << i;  // 30-34: within 200 ms of label 6's last frame
+        } else {
+            EXPECT_EQ(s.label, 4) << i;
+            EXPECT_DOUBLE_EQ(s.held_ms, 40.0 * (i - 30)) << i;
+        }
+        if (s.fired && i >= 30) fired_at = i;
+    }
+    EXPECT_EQ(fired_at, 55);
+    // A third label in the new one's first frame starts the run anew (fig. 3.22's
+    // trials: a closed grasper held, then one frame of open scissors, then the open
+    // grasper): the open grasper's hold dates from its own first frame.
+    GestureHold third({1000.0, 0.03, 200.0});
+    fired_at = -1;
+    for (int i = 0; i < 70; ++i) {
+        const int label = i < 30 ? 1 : i == 30 ? 2 : 0;
+        const GestureHold::State s = third.update(label, {100.0, 50.0}, i * frame, 5.0);
+        if (i >= 35) {
+            EXPECT_EQ(s.label, 0) << i;
+            EXPECT_DOUBLE_EQ(s.held_ms, 40.0 * (i - 31)) << i;
+        }
+        if (s.fired && i >= 30) fired_at = i;
+    }
+    EXPECT_EQ(fired_at, 56);
+    // A run of none that lasts (the tools parted) still ends the hold after 200 ms.
+    GestureHold parted({1000.0, 0.03, 200.0});
+    for (int i = 0; i < 20; ++i) {
+        const GestureHold::State s = parted.update(i < 10 ? 4 : -1, {100.0, 50.0}, i * frame, 5.0);
+        EXPECT_EQ(s.label, i < 15 ? 4 : -1) << i;
+    }
+}
+
 // A label seen in one frame of four, each gap (120 ms) inside the dropout tolerance, is
 // not held (surgery_motion seed 39: two tools at rest read as a cross in 7 of 26 frames
 // opened the quadrant menu); one missing in one frame of three (two thirds) still fires

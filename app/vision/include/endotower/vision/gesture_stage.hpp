@@ -60,10 +60,12 @@ private:
     Point2 anchor_, seen_;                     // where the hold began, where it was last seen
     hal::Nanos start_ns_ = 0, agreed_ns_ = 0;  // the hold's start, its last agreeing frame
     bool fired_ = false;
-    int pending_ = -1;  // the other label seen since the last agreeing frame
+    static constexpr int kNoPending = -2;  // (-1 is a run of frames with no gesture)
+    int pending_ = kNoPending;             // the other label seen since the last agreeing frame
     Point2 pending_anchor_;
-    hal::Nanos pending_ns_ = 0;
-    int frames_ = 0, agreed_ = 0, pending_frames_ = 0;  // the hold's frames, those agreeing
+    hal::Nanos pending_ns_ = 0, pending_seen_ns_ = 0;  // its first and last frame
+    int frames_ = 0, agreed_ = 0;                      // the hold's frames, those agreeing
+    int pending_frames_ = 0, pending_agreed_ = 0;      // the same for the pending label
 };
 
 struct GestureStageParams {
