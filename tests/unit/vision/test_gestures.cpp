@@ -630,16 +630,32 @@ TEST(GestureClassifier, TwoNetworksKeepTheTwoToolCallsAndReadOneToolAlongTheRim)
     EXPECT_NE(error.find("extended"), std::string::npos) << error;
 }
 
-// Samples marked two_tool_only (more crossing poses) train the two-tool network alone:
-// every single-tool call is the same bytes as without them, and the two-tool network
-// learns the new pose.
-TEST(GestureClassifier, TwoToolOnlySamplesLeaveTheSingleToolNetworkAsItWas) {
+// The synthetic samples with the two-tool gestures entering twice, and the two-network
+// parameters the tests of --two-tool-scene and retrain_two_tool train with.
+namespace {
+
+std::vector<GestureSample> two_entry_samples() {
     std::vector<GestureSample> samples = synthetic_samples(12);
     for (GestureSample& s : samples) s.entries = s.label >= 4 ? 2 : 1;
+    return samples;
+}
+
+GestureTrainParams two_network_params() {
     GestureTrainParams p;
     p.features = GestureFeatureSet::kExtended;
     p.iterations = 2000;
     p.two_tool_network = true;
+    return p;
+}
+
+}  // namespace
+
+// Samples marked two_tool_only (more crossing poses) train the two-tool network alone:
+// every single-tool call is the same bytes as without them, and the two-tool network
+// learns the new pose.
+TEST(GestureClassifier, TwoToolOnlySamplesLeaveTheSingleToolNetworkAsItWas) {
+    const std::vector<GestureSample> samples = two_entry_samples();
+    GestureTrainParams p = two_network_params();
     std::string error;
     GestureClassifier before;
     ASSERT_TRUE(before.train(samples, p, error)) << error;
@@ -668,12 +684,8 @@ TEST(GestureClassifier, TwoToolOnlySamplesLeaveTheSingleToolNetworkAsItWas) {
 // single-tool network kept: every single-tool call the same bytes, the new pose
 // learnt; refused for a model without a two-tool network or for other features.
 TEST(GestureClassifier, RetrainingTheTwoToolNetworkKeepsTheSingleToolNetwork) {
-    std::vector<GestureSample> samples = synthetic_samples(12);
-    for (GestureSample& s : samples) s.entries = s.label >= 4 ? 2 : 1;
-    GestureTrainParams p;
-    p.features = GestureFeatureSet::kExtended;
-    p.iterations = 2000;
-    p.two_tool_network = true;
+    const std::vector<GestureSample> samples = two_entry_samples();
+    GestureTrainParams p = two_network_params();
     std::string error;
     GestureClassifier before;
     ASSERT_TRUE(before.train(samples, p, error)) << error;
