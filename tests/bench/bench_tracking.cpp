@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 #include <memory>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -78,7 +78,10 @@ void BM_LikelihoodTracker1080p(benchmark::State& state) {
         state.SkipWithError(error.c_str());
         return;
     }
-    vision::LikelihoodToolTracker tracker(model);
+    // range(1) 0: without the bars from the rim (docs/performance.md, their cost).
+    vision::LikelihoodToolTrackerParams params;
+    params.rim_bars = state.range(1) != 0;
+    vision::LikelihoodToolTracker tracker(model, params);
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
     tracker.configure(fmt);
     std::vector<cv::Mat> frames;
@@ -102,12 +105,16 @@ void BM_LikelihoodTracker1080p(benchmark::State& state) {
     }
     time_tracking(state, tracker, frames, fmt);
 }
-BENCHMARK(BM_LikelihoodTracker1080p)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_LikelihoodTracker1080p)
+    ->ArgsProduct({{1, 2}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(3.0);
 
 // The book's further trackers (ekf, mog2, particle, particle_sorted, hybrid, mhi) by
 // name, on the moving-shaft frames of the Kalman benchmark (motion for mog2/mhi).
 void BM_BookTracker1080p(benchmark::State& state) {
-    const std::string_view name = vision::book_tracker_names()[static_cast<std::size_t>(state.range(0))];
+    const std::string_view name =
+        vision::book_tracker_names()[static_cast<std::size_t>(state.range(0))];
     state.SetLabel(std::string(name));
     const std::unique_ptr<vision::ToolTracker> tracker = vision::make_book_tracker(name);
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};

@@ -13,6 +13,7 @@
 #include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
 #include "reduce_frame.hpp"
+#include "rim_bar_search.hpp"
 
 namespace endotower::vision {
 
@@ -26,6 +27,7 @@ struct Candidate {
     bool split = false;       // cut from a region shared with another tool
     bool end_hidden = false;  // its far end runs under the other tool
     bool solid = true;        // min_solid_fraction of it tool-coloured before the blur
+    double support = 0;       // its length, or a bar's along it (analysis px); ranks tools
     int track = -1;           // the track whose prediction cut it out, or -1
     Segment e1, e2;
 };
@@ -183,6 +185,7 @@ struct LikelihoodToolTracker::Work {
     std::vector<Candidate> candidates;
     std::array<Track, ToolTracker::kMaxTools> tracks{};
     double fov_cx = 0, fov_cy = 0, fov_r = 0;
+    detail::RimBarSearch bars;
 };
 
 LikelihoodToolTracker::LikelihoodToolTracker(const ToolLikelihood& model,
@@ -223,7 +226,8 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     // at most kMaxTools.
     const double f = params_.min_area_fraction;
     const std::size_t large = f > 0 ? static_cast<std::size_t>(1.0 / f) + 1 : regions;
-    w.candidates.reserve(kMaxTools * std::min(large, regions));
+    w.candidates.reserve(kMaxTools * std::min(large, regions) + 6);
+    w.bars.configure(sw, sh);
     for (Track& t : w.tracks) t = Track{};
 }
 
@@ -562,8 +566,55 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             if (w.tracks[t].id >= 0 && pair_cost(c, t) <= kContinuationCost) return false;
         return true;
     });
+    // Bars of tool likelihood from the rim (docs/tracking.md, "Bars from the rim"): a
+    // region along one is that tool (its support: its own length or the bar's); a long
+    // bar along no region is a tool the regions missed (a dark shaft in shadow). Where
+    // such a bar is added, the tools with the longest straight support win, not the
+    // largest.
+    bool added = false;
+    if (params_.rim_bars) {
+        const std::span<const detail::RimBar> bars =
+            w.bars.search(w.prob.ptr<std::uint8_t>(0), w.eroded.ptr<std::uint8_t>(0), w.prob.step);
+        const std::size_t regions = w.candidates.size();
+        // A region's own length is its support; a part of a region two tools share keeps
+        // its place (its length is cut by the other tool, and it has a track).
+        for (Candidate& c : w.candidates)
+            c.support = c.split ? std::numeric_limits<double>::max() : c.length;
+        for (const detail::RimBar& b : bars) {
+            const double axis = std::atan2(b.rim.y - b.tip.y, b.rim.x - b.tip.x) * 180.0 / M_PI;
+            bool along = false;
+            for (std::size_t k = 0; k < regions; ++k) {
+                Candidate& c = w.candidates[k];
+                // Along it: within 20 degrees, and either tip within two widths of the
+                // other's shaft (a bar can stop short of the jaws, a region at them).
+                const double near = 2 * std::max(b.width, c.width);
+                if (std::abs(std::remainder(c.axis_deg - axis, 180.0)) > 20.0 ||
+                    (segment_distance(b.rim, b.tip, c.tip.x, c.tip.y) > near &&
+                     segment_distance(c.rim_end, c.tip, b.tip.x, b.tip.y) > near))
+                    continue;
+                c.support = std::max(c.support, b.length);
+                along = true;
+            }
+            if (along || b.length < params_.bar_min_length_fraction * W ||
+                b.frames < params_.bar_min_frames)
+                continue;
+            Candidate c;
+            added = true;
+            c.support = c.length = b.length;
+            c.width = c.shaft_width = b.width;
+            c.area = b.length * b.width;
+            c.tip = b.tip;
+            c.rim_end = b.rim;
+            c.axis_deg = axis;
+            c.confidence = std::clamp(b.level / 255.0, 0.0, 1.0);
+            w.candidates.push_back(c);
+        }
+    }
     std::sort(w.candidates.begin(), w.candidates.end(),
-              [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
+              [added](const Candidate& a, const Candidate& b) {
+                  if (added && a.support != b.support) return a.support > b.support;
+                  return a.area > b.area;
+              });
     const std::size_t found = std::min({w.candidates.size(), params_.max_tools, kMaxTools});
     std::array<int, kMaxTools> track_of{-1, -1};
     double best = std::numeric_limits<double>::max();

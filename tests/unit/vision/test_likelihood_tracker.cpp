@@ -12,6 +12,7 @@
 #include "endotower/vision/likelihood_tool_tracker.hpp"
 #include "endotower/vision/tool_likelihood.hpp"
 #include "heap_counter.hpp"
+#include "rim_bar_search.hpp"
 
 namespace endotower::vision {
 namespace {
@@ -451,6 +452,94 @@ TEST(LikelihoodToolTracker, GlintSpeckleIsNoToolButDoesNotCostATrackedTool) {
         EXPECT_EQ(out[0].id, id) << k;
         EXPECT_LT(std::hypot(out[0].tip.x - s.tip.x, out[0].tip.y - s.tip.y), s.width) << k;
         EXPECT_LT(angle_diff(out[0].axis_deg, s.dir_deg), 10.0) << k;
+    }
+}
+
+// Bars from the rim (docs/tracking.md): a straight bar of likelihood below even odds,
+// but above the tissue on both sides, from the rim inwards, with a band of even odds
+// along the rim where it comes in (sznitman_lap's dark shaft in shadow).
+TEST(RimBarSearch, FindsABarBelowEvenOddsFromTheRimThroughABandAlongIt) {
+    const int W = 320, H = 240;
+    cv::Mat prob(H, W, CV_8U, cv::Scalar(15)), lit(H, W, CV_8U, cv::Scalar(0));
+    cv::circle(lit, {160, 120}, 115, cv::Scalar(1), -1);
+    std::mt19937 rng(3);
+    std::uniform_int_distribution<int> jitter(-10, 10);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) prob.at<std::uint8_t>(y, x) = 15 + jitter(rng) / 2 + 5;
+    // The band along the rim, above the picture's top, and the shaft: 12 px wide from
+    // the top of the circle down to (140, 150).
+    cv::ellipse(prob, {160, 120}, {110, 110}, 0, 225, 315, cv::Scalar(200), 8);
+    cv::line(prob, {128, 0}, {140, 150}, cv::Scalar(110), 12);
+    detail::RimBarSearch search;
+    search.configure(W, H);
+    std::span<const detail::RimBar> bars;
+    for (int frame = 0; frame < detail::RimBarSearch::kOrientations; ++frame)
+        bars = search.search(prob.ptr<std::uint8_t>(0), lit.ptr<std::uint8_t>(0), prob.step);
+    ASSERT_GE(bars.size(), 1u);
+    const detail::RimBar& b = bars[0];
+    EXPECT_NEAR(b.tip.x, 140, 6);
+    EXPECT_NEAR(b.tip.y, 150, 6);
+    EXPECT_LT(b.rim.y, 25);  // from the top of the lit circle (y 5), through the band
+    EXPECT_NEAR(b.inward_deg, std::atan2(150.0, 12.0) * 180 / M_PI, 6);
+    EXPECT_GE(b.width, 8);
+    EXPECT_LE(b.width, 12);
+    EXPECT_GT(b.frames, 3);
+    // Nothing else is that long and straight: the band lies along the rim, not in from it.
+    for (std::size_t k = 1; k < bars.size(); ++k) EXPECT_LT(bars[k].length, 0.3 * W);
+    // The same likelihood not above the tissue beside it (a wide patch): no bar.
+    cv::Mat patch = prob.clone();
+    cv::rectangle(patch, {60, 0}, {210, 150}, cv::Scalar(110), -1);
+    detail::RimBarSearch none;
+    none.configure(W, H);
+    for (int frame = 0; frame < detail::RimBarSearch::kOrientations; ++frame)
+        bars = none.search(patch.ptr<std::uint8_t>(0), lit.ptr<std::uint8_t>(0), patch.step);
+    for (const detail::RimBar& bar : bars) EXPECT_LT(bar.length, 0.3 * W);
+}
+
+// Through the tracker: a shaft coloured where the model is unsure (p about 113 of 255,
+// below even odds, tissue about 0) is no region, but is found as a bar from the rim once
+// the search has seen it three frames in a row; without the search, nothing is found.
+TEST(LikelihoodToolTracker, AShaftBelowEvenOddsIsFoundAsABarFromTheRim) {
+    // The model: grey tool, red tissue, and a dark colour that is tool in 43 % of its
+    // training pixels (the totals equal, so P(tool | dark) = 0.44).
+    const cv::Vec3b grey(128, 126, 124), red(60, 50, 190), dark(80, 72, 96);
+    cv::Mat train(50, 100, CV_8UC3);
+    std::vector<std::uint8_t> labels(train.total());
+    for (int i = 0; i < static_cast<int>(train.total()); ++i) {
+        const int k = i % 1000;
+        const bool tool_grey = k < 400, tissue = k >= 400 && k < 800,
+                   dark_tool = k >= 800 && k < 886;
+        train.at<cv::Vec3b>(i / 100, i % 100) = tool_grey ? grey : tissue ? red : dark;
+        labels[i] = tool_grey || dark_tool;
+    }
+    ToolLikelihood m;
+    m.add(view(train), labels.data());
+    std::string error;
+    ASSERT_TRUE(m.finish(error)) << error;
+    ASSERT_GT(m.probability(dark[0], dark[1], dark[2]), 90);
+    ASSERT_LT(m.probability(dark[0], dark[1], dark[2]), 128);
+    cv::Mat img = scope_frame({});
+    cv::line(img, {250, 0}, {300, 260}, cv::Scalar(dark[0], dark[1], dark[2]), 26);
+    cv::Mat outside(480, 640, CV_8U, cv::Scalar(255));
+    cv::circle(outside, {320, 240}, 229, cv::Scalar(0), -1);
+    img.setTo(cv::Scalar(0, 0, 0), outside);
+    for (const bool bars : {true, false}) {
+        LikelihoodToolTrackerParams p;
+        p.rim_bars = bars;
+        LikelihoodToolTracker tracker(m, p);
+        tracker.configure(view(img).format);
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        std::size_t n = 0;
+        for (int frame = 0; frame < 40; ++frame) n = tracker.track(view(img), out);
+        if (!bars) {
+            EXPECT_EQ(n, 0u);
+            continue;
+        }
+        ASSERT_EQ(n, 1u);
+        EXPECT_NEAR(out[0].tip.x, 300, 12);
+        EXPECT_NEAR(out[0].tip.y, 260, 12);
+        EXPECT_LT(angle_diff(out[0].axis_deg, std::atan2(-260.0, -50.0) * 180 / M_PI), 6);
+        EXPECT_NEAR(out[0].width_px, 24, 6);  // the bar's width, 6, 8 or 12 analysis px
     }
 }
 

@@ -29,7 +29,14 @@
 // measurement that jumps more than the gate (4 sigma, one to two widths) or turns by
 // more than 20 degrees is the other tool's part, and the track reports its prediction
 // at half confidence, up to `max_coast_frames`. A tool missing for `keep_frames`
-// frames loses its id. Results in the full frame's coordinates. Owns the model.
+// frames loses its id. Bars from the rim (`rim_bars`, RimBarSearch: a straight bar of
+// likelihood above the tissue on both sides, coming in from the rim, found even below
+// even odds): a region along a bar takes the bar's length as its support; a bar along no
+// region, at least `bar_min_length_fraction` (0.3) x the width long and found in
+// `bar_min_frames` (3) frames in a row, is a tool of its own (width: the bar's); where
+// one is added, the candidates with the longest support (a region: its length; a part
+// of a shared region: always) are the tools, not the largest (docs/tracking.md, "Bars
+// from the rim"). Results in the full frame's coordinates. Owns the model.
 // configure() sizes every buffer; track() then allocates nothing (its image operations
 // are MaskOps and BlockMean, OpenCV's bytes without OpenCV's per-call buffers), except
 // that a frame width that is not an integer multiple of the analysis width (up to 15)
@@ -59,6 +66,9 @@ struct LikelihoodToolTrackerParams {
     int keep_frames = 5;
     int max_coast_frames = 25;  // a crossing at 3 cm/s takes about a second
     std::size_t max_tools = 2;
+    bool rim_bars = true;                  // RimBarSearch (docs/tracking.md, "Bars from the rim")
+    double bar_min_length_fraction = 0.3;  // of the width: a bar that is a tool on its own
+    int bar_min_frames = 3;                // ... once found in this many frames in a row
 };
 
 class LikelihoodToolTracker final : public ToolTracker {
