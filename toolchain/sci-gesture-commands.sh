@@ -15,10 +15,13 @@
 # for the loop its radius (3-5 mm) and duration (0.9-1.4 s). Prints one line per trial
 # and the success per kind; the time to select is from the frame the tool starts
 # towards the item to the frame its command takes effect (confirm or exit).
-# Usage: [ENDOTOWER=BINARY] [FIRST=K] [GESTURES=MODEL] [KIND=K] toolchain/sci-gesture-commands.sh [OUT_DIR] [TRIALS]
+# Usage: [ENDOTOWER=BINARY] [FIRST=K] [GESTURES=MODEL] [KIND=K] [SCENES=DIR]
+#        toolchain/sci-gesture-commands.sh [OUT_DIR] [TRIALS]
 # (FIRST: the trials K..K+TRIALS-1 instead of 1..TRIALS, another sample of poses;
 # GESTURES: a gesture model to measure instead of the shipped one; KIND: only the
-# trials of that kind, confirm, deny or cross, are run)
+# trials of that kind, confirm, deny or cross, are run; SCENES: each trial's rendered
+# scene is kept there, and a trial already rendered there is only replayed, so another
+# build or model is measured on the same frames)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/out/sci_gestures}
@@ -51,8 +54,10 @@ for i in $(seq "$first" "$last"); do
         python3 "$root/toolchain/sci_gesture_trial.py" scenario "$i" > "$t/scenario.yaml"
         events=$(python3 "$root/toolchain/sci_gesture_trial.py" kind "$i")
         [ "$events" = cross ] && events="" || events=$out/button.txt
-        "$bin" scene --scenario "$t/scenario.yaml" --out "$t/scene" > /dev/null
-        "$bin" sim --board "$out/board.yaml" --input "$t/scene/frames" --events "$events" \
+        scene=${SCENES:+$SCENES/trial_$i}
+        scene=${scene:-$t/scene}
+        [ -f "$scene/truth.jsonl" ] || "$bin" scene --scenario "$t/scenario.yaml" --out "$scene" > /dev/null
+        "$bin" sim --board "$out/board.yaml" --input "$scene/frames" --events "$events" \
             --out "$t/o.avi" --trace "$t.jsonl.part" > /dev/null
         mv "$t.jsonl.part" "$t.jsonl"
         rm -rf "$t/scene" "$t/o.avi"

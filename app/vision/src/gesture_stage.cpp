@@ -72,10 +72,16 @@ void GestureStage::process(app::AnalysisContext& ctx) {
             (two_tool_gesture(results[i].label) && blobs_[i].arms < 2))
             results[i].label = -1;
     }
-    // One region with a gesture: it is the frame's; two: two single-tool calls.
-    std::size_t gestures = 0, which = 0;
-    for (std::size_t i = 0; i < n; ++i)
+    // One region with a gesture: it is the frame's; two: two single-tool calls. A region
+    // with a two-tool gesture holds both of the surgeon's tools, so what another region
+    // shows is not one of them (a glint patch at the rim read as scissors; docs/gestures.md,
+    // "A crossing and a third region").
+    std::size_t gestures = 0, which = 0, crossings = 0, crossing = 0;
+    for (std::size_t i = 0; i < n; ++i) {
         if (results[i].label >= 0) ++gestures, which = i;
+        if (two_tool_gesture(results[i].label)) ++crossings, crossing = i;
+    }
+    if (crossings == 1 && params_.crossing_is_the_frames) gestures = 1, which = crossing;
     const bool one = gestures == 1;
     const GestureHold::State s =
         hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},

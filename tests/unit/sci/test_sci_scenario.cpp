@@ -273,6 +273,40 @@ TEST(SciScenario, ACrossHeldStillOpensTheQuadrantMenuAndAgainTurnsTheSciOff) {
     fs::remove_all(dir);
 }
 
+// The SCI's cross trial 27: beside the crossing, a patch of glints reaching the rim is a
+// region of its own, read as scissors. Two regions with a gesture used to be two
+// single-tool calls, so the frame had no gesture and no menu opened; a region with a
+// two-tool gesture holds both tools, so it is the frame's (docs/gestures.md).
+TEST(SciScenario, ACrossBesideAGlintPatchReadAsScissorsOpensTheQuadrantMenu) {
+    const fs::path dir = temp_dir("cross_glints");
+    const std::string failed = replay_with_gestures(dir, "cross_beside_glints.yaml", "ring");
+    ASSERT_TRUE(failed.empty()) << failed;
+    const std::vector<Step> every = read_steps(dir), events = events_of(every);
+    ASSERT_EQ(every.size(), 120u);
+    ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
+    EXPECT_EQ(events[0], (Step{events[0].frame, "menu", "quadrant", "-", "quadrant"}));
+    EXPECT_GE(events[0].frame, 43);
+    EXPECT_LE(events[0].frame, 45);
+    EXPECT_EQ(events[1], (Step{events[1].frame, "inactive", "-", "-", "deactivate"}));
+    EXPECT_GE(events[1].frame, 113);
+    EXPECT_LE(events[1].frame, 115);
+    // The case is there: frames with the cross and a second region read as scissors.
+    int beside = 0;
+    std::ifstream trace(dir / "trace.jsonl");
+    for (std::string line; std::getline(trace, line);) {
+        const nlohmann::json tools = nlohmann::json::parse(line)["gesture"]["tools"];
+        bool cross = false, scissors = false;
+        for (const auto& t : tools) {
+            const std::string label = t["label"].is_string() ? t["label"].get<std::string>() : "";
+            cross = cross || label == "cross";
+            scissors = scissors || label.find("scissors") != std::string::npos;
+        }
+        beside += cross && scissors;
+    }
+    EXPECT_GE(beside, 50);
+    fs::remove_all(dir);
+}
+
 TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
     const fs::path dir = temp_dir("board");
     std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";

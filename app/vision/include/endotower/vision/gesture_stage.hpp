@@ -3,7 +3,10 @@
 // Per frame: GestureSegmenter finds up to two tool tips; each is classified
 // (GestureClassifier). One region with a gesture = the frame's gesture (a single tool,
 // or two crossing tools: cross / triangle / double triangle); two are two single-tool
-// calls (fig. 3.21) and the frame's label is null (each tool's own is listed).
+// calls (fig. 3.21) and the frame's label is null (each tool's own is listed), except
+// that a region with a two-tool gesture holds both tools, so its gesture is the frame's
+// whatever another region shows (`crossing_is_the_frames`, default on: a glint patch at
+// the rim read as scissors beside a cross; docs/gestures.md).
 // A label below `min_confidence` (0.5) counts as none; so does a region whose tip
 // window no arm leaves (GestureBlob::arms 0: the window holds the whole region, so its
 // shape is not the jaws'; two tools at rest against each other read as a cross), and a
@@ -71,6 +74,7 @@ private:
 struct GestureStageParams {
     GestureHoldParams hold;
     double min_confidence = 0.5;
+    bool crossing_is_the_frames = true;  // a two-tool gesture outranks other regions
 };
 
 // One frame's gesture: label -1 = none; tip where the gesture's region is (px).
