@@ -65,12 +65,7 @@ double angle_diff_deg(double a, double b) {
     return std::abs(std::remainder(a - b, 360.0));
 }
 
-// Distance of (x, y) to the segment a-b.
-double segment_distance(Point2 a, Point2 b, double x, double y) {
-    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
-    const double t = l2 > 0 ? std::clamp(((x - a.x) * dx + (y - a.y) * dy) / l2, 0.0, 1.0) : 0.0;
-    return std::hypot(x - a.x - t * dx, y - a.y - t * dy);
-}
+using detail::segment_distance;
 
 struct Px {
     std::int16_t x, y;

@@ -11,21 +11,13 @@ namespace {
 constexpr double kStepDeg = 180.0 / RimBarSearch::kOrientations;
 constexpr std::uint8_t kValid = 1, kGood = 16;  // per width index: << index
 
-// Distance of p to the segment a-b.
-double segment_distance(Point2 a, Point2 b, Point2 p) {
-    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
-    const double t =
-        l2 > 0 ? std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / l2, 0.0, 1.0) : 0.0;
-    return std::hypot(p.x - a.x - t * dx, p.y - a.y - t * dy);
-}
-
 // Two bars are one where their directions differ by less than 20 degrees and either tip
 // lies within two widths (+ 4 px) of the other's segment.
 bool same_bar(const RimBar& a, const RimBar& b) {
     if (std::abs(std::remainder(a.inward_deg - b.inward_deg, 360.0)) >= 20.0) return false;
     const double near = 2 * std::max(a.width, b.width) + 4;
-    return segment_distance(a.rim, a.tip, b.tip) < near ||
-           segment_distance(b.rim, b.tip, a.tip) < near;
+    return segment_distance(a.rim, a.tip, b.tip.x, b.tip.y) < near ||
+           segment_distance(b.rim, b.tip, a.tip.x, a.tip.y) < near;
 }
 
 }  // namespace

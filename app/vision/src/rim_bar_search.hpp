@@ -28,7 +28,9 @@
 // before it was scored.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -36,6 +38,13 @@
 #include "endotower/vision/tool_pose.hpp"
 
 namespace endotower::vision::detail {
+
+// Distance of (x, y) to the segment a-b (the likelihood tracker's too).
+inline double segment_distance(Point2 a, Point2 b, double x, double y) {
+    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+    const double t = l2 > 0 ? std::clamp(((x - a.x) * dx + (y - a.y) * dy) / l2, 0.0, 1.0) : 0.0;
+    return std::hypot(x - a.x - t * dx, y - a.y - t * dy);
+}
 
 struct RimBarParams {
     std::array<int, 2> widths{4, 6};        // half-size px (8, 12 at 320 px)
