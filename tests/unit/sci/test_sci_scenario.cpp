@@ -15,6 +15,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "endotower_command.hpp"
@@ -252,6 +253,21 @@ TEST(SciScenario, AStraightStrokeDeniesAfterTwoSeconds) {
     fs::remove_all(dir);
 }
 
+// A 120-frame cross scenario's only two events: the quadrant menu opening on a frame in
+// `open` (first, last), then the SCI turning off on a frame in `off`.
+void expect_quadrant_then_off(const fs::path& dir, std::pair<int, int> open,
+                              std::pair<int, int> off) {
+    const std::vector<Step> every = read_steps(dir), events = events_of(every);
+    ASSERT_EQ(every.size(), 120u);
+    ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
+    EXPECT_EQ(events[0], (Step{events[0].frame, "menu", "quadrant", "-", "quadrant"}));
+    EXPECT_GE(events[0].frame, open.first);
+    EXPECT_LE(events[0].frame, open.second);
+    EXPECT_EQ(events[1], (Step{events[1].frame, "inactive", "-", "-", "deactivate"}));
+    EXPECT_GE(events[1].frame, off.first);
+    EXPECT_LE(events[1].frame, off.second);
+}
+
 // The cross as a command (fig. 3.34a; board/sim/scenarios/sci/cross_quadrant.yaml, no
 // handle events): two closed tools cross their jaws in the middle and hold still; the
 // quadrant menu opens 1.0 s after they came to rest (the tracked tips stop on frame 24
@@ -261,15 +277,7 @@ TEST(SciScenario, ACrossHeldStillOpensTheQuadrantMenuAndAgainTurnsTheSciOff) {
     const fs::path dir = temp_dir("cross");
     const std::string failed = replay_with_gestures(dir, "cross_quadrant.yaml", "ring");
     ASSERT_TRUE(failed.empty()) << failed;
-    const std::vector<Step> every = read_steps(dir), events = events_of(every);
-    ASSERT_EQ(every.size(), 120u);
-    ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
-    EXPECT_EQ(events[0], (Step{events[0].frame, "menu", "quadrant", "-", "quadrant"}));
-    EXPECT_GE(events[0].frame, 49);
-    EXPECT_LE(events[0].frame, 50);
-    EXPECT_EQ(events[1], (Step{events[1].frame, "inactive", "-", "-", "deactivate"}));
-    EXPECT_GE(events[1].frame, 114);
-    EXPECT_LE(events[1].frame, 115);
+    expect_quadrant_then_off(dir, {49, 50}, {114, 115});
     fs::remove_all(dir);
 }
 
@@ -281,15 +289,7 @@ TEST(SciScenario, ACrossBesideAGlintPatchReadAsScissorsOpensTheQuadrantMenu) {
     const fs::path dir = temp_dir("cross_glints");
     const std::string failed = replay_with_gestures(dir, "cross_beside_glints.yaml", "ring");
     ASSERT_TRUE(failed.empty()) << failed;
-    const std::vector<Step> every = read_steps(dir), events = events_of(every);
-    ASSERT_EQ(every.size(), 120u);
-    ASSERT_EQ(events.size(), 2u) << ::testing::PrintToString(events);
-    EXPECT_EQ(events[0], (Step{events[0].frame, "menu", "quadrant", "-", "quadrant"}));
-    EXPECT_GE(events[0].frame, 43);
-    EXPECT_LE(events[0].frame, 45);
-    EXPECT_EQ(events[1], (Step{events[1].frame, "inactive", "-", "-", "deactivate"}));
-    EXPECT_GE(events[1].frame, 113);
-    EXPECT_LE(events[1].frame, 115);
+    expect_quadrant_then_off(dir, {43, 45}, {113, 115});
     // The case is there: frames with the cross and a second region read as scissors.
     int beside = 0;
     std::ifstream trace(dir / "trace.jsonl");
