@@ -12,7 +12,9 @@
 #   --share    a host directory mounted writable at the same path in the guest
 #              (for files the command leaves for the host). Repeatable.
 #   --cache    where setup.sh keeps the prepared guest (default: build/vhw).
-#   --timeout  wall-clock limit for the whole guest run (default 600 s).
+#   --timeout  wall-clock limit for the whole guest run (default 600 s). A command still
+#              running 60 s before it (2/3 of it under 90 s) is stuck: the kernel stacks
+#              of every task go to stderr and it is killed (exit status 124).
 #   --qemu-arg one more qemu argument (e.g. "-device" "qemu-xhci"). Repeatable.
 # COMMAND runs in the current directory, with PATH, HOME, LANG and every GTEST_*,
 # ENDOTOWER_* and ASAN/UBSAN/TSAN_OPTIONS variable of the caller; its stdout and
@@ -97,8 +99,31 @@ STAGE2
     # configfs is a module in Debian's kernel (gpio-sim is configured through it).
     echo 'modprobe -q configfs; mount -t configfs configfs /sys/kernel/config 2>/dev/null'
     echo "cd $(printf %q "$PWD") || { echo 'run-in-guest: cannot cd to $(printf %q "$PWD")' >>\"\$R/stderr\"; finish 125; }"
-    echo "$(printf '%q ' "$@") >\"\$R/stdout\" 2>>\"\$R/stderr\" </dev/null"
-    echo 'finish $?'
+    echo "$(printf '%q ' "$@") >\"\$R/stdout\" 2>>\"\$R/stderr\" </dev/null &"
+    # A command still running shortly before the guest's limit is stuck: what every task
+    # waits on in the kernel goes to stderr (sysrq w: the blocked ones, with stacks),
+    # then it is killed and the guest reports 124, as timeout(1) would.
+    echo "watchdog=$(( timeout_s > 90 ? timeout_s - 60 : timeout_s * 2 / 3 ))"
+    cat <<'STAGE2'
+pid=$!
+( sleep "$watchdog"
+  kill -0 "$pid" 2>/dev/null || exit 0
+  {
+      echo "run-in-guest: the command is still running after ${watchdog} s; tasks and their kernel stacks:"
+      for t in /proc/[0-9]*/task/[0-9]*; do
+          [ -n "$(tr -d '\0' <"${t%/task/*}/cmdline" 2>/dev/null)" ] || continue  # no kernel threads
+          echo "--- $t $(cat "$t/comm" 2>/dev/null) $(grep -m1 '^State' "$t/status" 2>/dev/null) wchan=$(cat "$t/wchan" 2>/dev/null)"
+          cat "$t/stack" 2>/dev/null
+      done
+      echo w >/proc/sysrq-trigger
+      dmesg | tail -n 60
+  } >>"$R/stderr" 2>&1
+  kill -9 "$pid" ) &
+wait "$pid"
+rc=$?
+[ $rc -eq 137 ] && grep -q "still running after" "$R/stderr" 2>/dev/null && rc=124
+finish $rc
+STAGE2
 } >"$results/guest.sh"
 
 t0=$(date +%s.%N)
