@@ -43,8 +43,9 @@ void RimBarSearch::configure(int width, int height) {
     lit_.assign(prob_.size(), 0);
     flags_.assign(cells, 0);
     contrast_.assign(cells * params_.widths.size(), 0);
+    col_first_.assign(static_cast<std::size_t>(d_) * params_.widths.size(), d_);
+    col_last_.assign(col_first_.size(), -1);
     sum_p_.assign(d_ + 1, 0), sum_l_.assign(d_ + 1, 0);
-    row_p_.assign(d_, 0), row_l_.assign(d_, 0);
     kept_.clear(), scanned_.clear(), out_.clear();
     kept_.reserve(kMaxBars + kOrientations * kKeptPerScan);
     scanned_.reserve(static_cast<std::size_t>(d_) * params_.widths.size() * 2);
@@ -54,14 +55,15 @@ void RimBarSearch::configure(int width, int height) {
 
 // The run along one line, given each point's flags and contrast in scan order (from the
 // rim inwards): the bar from its first lit point, or false.
+// `from`: where to start looking for the first lit point (a point known to be before it).
 template <typename PointAt>
-static bool run_bar(int n, int width, int width_index, const RimBarParams& p, double touch,
-                    double min_length, PointAt point_at, int& r0_out, int& end_out, double& score,
-                    double& level) {
+static bool run_bar(int from, int n, int width, int width_index, const RimBarParams& p,
+                    double touch, double min_length, PointAt point_at, int& r0_out, int& end_out,
+                    double& score, double& level) {
     const int gap = std::max(2, width);
     int r0 = -1, rs = -1, end = -1, count = 0, bad = 0;
     score = level = 0;
-    for (int s = 0; s < n; ++s) {
+    for (int s = from; s < n; ++s) {
         std::uint8_t f;
         int c, lv;
         point_at(s, f, c, lv);
@@ -112,10 +114,25 @@ bool RimBarSearch::measure(const Line& l, int wi, bool reverse, RimBar& out) con
         if (S >= params_.min_level && C >= params_.min_contrast)
             f |= kGood << wi, contrast = std::min(C, 255), level = S;
     };
+    // Before the line's centre enters the picture no footprint is lit: start there.
+    double t_in = 0, t_out = d_ - 1;
+    auto clip = [&](double o, double d, int size) {
+        if (std::abs(d) < 1e-12) {
+            if (o < -0.5 || o > size - 0.5) t_in = 1, t_out = 0;
+            return;
+        }
+        const double a = (-0.5 - o) / d, b = (size - 0.5 - o) / d;
+        t_in = std::max(t_in, std::min(a, b)), t_out = std::min(t_out, std::max(a, b));
+    };
+    clip(l.ox + l.column * l.nx, l.dx, w_);
+    clip(l.oy + l.column * l.ny, l.dy, h_);
+    if (t_in > t_out) return false;
+    const int from = reverse ? std::max(0, d_ - 2 - static_cast<int>(std::ceil(t_out)))
+                             : std::max(0, static_cast<int>(std::floor(t_in)) - 1);
     int r0 = 0, end = 0;
     double score = 0, level = 0;
-    if (!run_bar(d_, w, wi, params_, params_.touch_fraction * w_, params_.min_length_fraction * w_,
-                 point_at, r0, end, score, level))
+    if (!run_bar(from, d_, w, wi, params_, params_.touch_fraction * w_,
+                 params_.min_length_fraction * w_, point_at, r0, end, score, level))
         return false;
     auto at = [&](int s) {
         const int t = reverse ? d_ - 1 - s : s;
@@ -132,6 +149,10 @@ bool RimBarSearch::measure(const Line& l, int wi, bool reverse, RimBar& out) con
 void RimBarSearch::scan(int orientation) {
     const Line base = line(orientation, 0);
     const std::size_t nw = params_.widths.size();
+    // Per width and column, the first and last row with a lit footprint (none: d_, -1),
+    // so that the runs below start there instead of walking the unlit part.
+    std::fill(col_first_.begin(), col_first_.end(), d_);
+    std::fill(col_last_.begin(), col_last_.end(), -1);
     // Every point's flags and contrast, row by row: the row's samples, their running
     // sums, then per width the strip, its flanks and the lit footprint from the sums.
     for (int t = 0; t < d_; ++t) {
@@ -150,37 +171,43 @@ void RimBarSearch::scan(int orientation) {
         clip(y0, base.ny, h_);
         const int first = std::max(0, static_cast<int>(std::floor(c_lo))),
                   last = std::min(d_ - 1, static_cast<int>(std::ceil(c_hi)));
-        std::fill(row_p_.begin(), row_p_.end(), 0);
-        std::fill(row_l_.begin(), row_l_.end(), 0);
         // Nearest pixel by 16.16 fixed point steps (the shift floors negatives too).
         constexpr double kOne = 65536.0;
         const auto fx0 = static_cast<std::int64_t>(std::floor((x0 + 0.5) * kOne)),
                    fy0 = static_cast<std::int64_t>(std::floor((y0 + 0.5) * kOne));
         const auto fnx = static_cast<std::int64_t>(std::llround(base.nx * kOne)),
                    fny = static_cast<std::int64_t>(std::llround(base.ny * kOne));
+        // Only [first, last] is sampled and summed: the columns outside it are unlit, so
+        // no footprint that reaches them is valid (below).
+        std::uint8_t* flags = flags_.data() + static_cast<std::size_t>(t) * d_;
+        std::fill(flags, flags + d_, 0);
+        if (first > last) continue;
+        sum_p_[first] = sum_l_[first] = 0;
         for (int c = first; c <= last; ++c) {
             const auto xi = static_cast<int>((fx0 + c * fnx) >> 16),
                        yi = static_cast<int>((fy0 + c * fny) >> 16);
-            if (xi < 0 || yi < 0 || xi >= w_ || yi >= h_) continue;
-            const std::size_t i = static_cast<std::size_t>(yi) * w_ + xi;
-            row_p_[c] = prob_[i], row_l_[c] = lit_[i];
+            int p = 0, l = 0;
+            if (xi >= 0 && yi >= 0 && xi < w_ && yi < h_) {
+                const std::size_t i = static_cast<std::size_t>(yi) * w_ + xi;
+                p = prob_[i], l = lit_[i];
+            }
+            sum_p_[c + 1] = sum_p_[c] + p;
+            sum_l_[c + 1] = sum_l_[c] + l;
         }
-        for (int c = 0; c < d_; ++c) {
-            sum_p_[c + 1] = sum_p_[c] + row_p_[c];
-            sum_l_[c + 1] = sum_l_[c] + row_l_[c];
-        }
-        std::uint8_t* flags = flags_.data() + static_cast<std::size_t>(t) * d_;
-        std::fill(flags, flags + d_, 0);
         for (std::size_t wi = 0; wi < nw; ++wi) {
             const int w = params_.widths[wi], off = (w + 1) / 2 + 1 + w / 2;
             const int lo = -off - w / 2, hi = off - w / 2 + w - 1;
+            // Read only where the point is good (run_bar), so not cleared.
             std::uint8_t* contrast = contrast_.data() + (wi * d_ + t) * d_;
-            std::fill(contrast, contrast + d_, 0);
+            int* col_first = col_first_.data() + wi * d_;
+            int* col_last = col_last_.data() + wi * d_;
             auto box = [&](int from) { return sum_p_[from + w] - sum_p_[from]; };
-            // Outside [first, last] nothing is lit, so no footprint there is.
-            for (int c = std::max(first, -lo); c <= std::min(last, d_ - 1 - hi); ++c) {
+            // Footprints inside [first, last] only.
+            for (int c = first - lo; c <= last - hi; ++c) {
                 if (sum_l_[c + hi + 1] - sum_l_[c + lo] < hi - lo + 1) continue;
                 flags[c] |= kValid << wi;
+                if (col_first[c] == d_) col_first[c] = t;
+                col_last[c] = t;
                 const int S = box(c - w / 2) / w;
                 if (S < params_.min_level) continue;
                 const int C = S - std::max(box(c + lo), box(c + hi - w + 1)) / w;
@@ -193,7 +220,8 @@ void RimBarSearch::scan(int orientation) {
     // Per line, width and way in: the bar, if any; the strongest few of this orientation.
     scanned_.clear();
     for (int c = 0; c < d_; ++c)
-        for (std::size_t wi = 0; wi < nw; ++wi)
+        for (std::size_t wi = 0; wi < nw; ++wi) {
+            if (col_first_[wi * d_ + c] == d_) continue;  // no lit footprint on this line
             for (const bool reverse : {false, true}) {
                 auto point_at = [&](int s, std::uint8_t& f, int& contrast, int& level) {
                     const int t = reverse ? d_ - 1 - s : s;
@@ -204,7 +232,9 @@ void RimBarSearch::scan(int orientation) {
                 };
                 int r0 = 0, end = 0;
                 double score = 0, level = 0;
-                if (!run_bar(d_, params_.widths[wi], static_cast<int>(wi), params_,
+                const int from =
+                    reverse ? d_ - 1 - col_last_[wi * d_ + c] : col_first_[wi * d_ + c];
+                if (!run_bar(from, d_, params_.widths[wi], static_cast<int>(wi), params_,
                              params_.touch_fraction * w_, params_.min_length_fraction * w_,
                              point_at, r0, end, score, level))
                     continue;
@@ -214,6 +244,7 @@ void RimBarSearch::scan(int orientation) {
                 k.bar.score = score;
                 scanned_.push_back(k);
             }
+        }
     std::sort(scanned_.begin(), scanned_.end(),
               [](const Kept& a, const Kept& b) { return a.bar.score > b.bar.score; });
     // The strongest few, each a bar of its own; a bar seen before keeps its age.

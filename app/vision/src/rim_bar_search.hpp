@@ -87,7 +87,7 @@ private:
     std::vector<std::uint8_t> flags_;       // per (row, column) of one scan: valid, good bits
     std::vector<std::uint8_t> contrast_;    // per width, row, column: S - max(L, R), clamped
     std::vector<std::int32_t> sum_p_, sum_l_;
-    std::vector<std::uint8_t> row_p_, row_l_;
+    std::vector<int> col_first_, col_last_;  // per width, column: first, last lit row
     std::vector<Kept> kept_, scanned_;
     std::vector<RimBar> out_;
 };
