@@ -5,7 +5,7 @@
 # a tmpfs overlay, so the build tree and the host's libraries run unchanged.
 #
 # Usage: run-in-guest.sh [--modules "vivid uhid gpio-sim vkms"] [--share DIR]...
-#                        [--cache DIR] [--timeout SEC] [--mem 2G] [--qemu-arg ARG]...
+#                        [--cache DIR] [--timeout SEC] [--mem 2G] [--cpus 2] [--qemu-arg ARG]...
 #                        -- COMMAND [ARG]...
 #   --modules  modules to modprobe before COMMAND; NAME:OPT=V:OPT2=V passes options
 #              (e.g. "vivid:n_devs=1"). Default: none.
@@ -15,6 +15,10 @@
 #   --timeout  wall-clock limit for the whole guest run (default 600 s). A command still
 #              running 60 s before it (2/3 of it under 90 s) is stuck: the kernel stacks
 #              of every task go to stderr and it is killed (exit status 124).
+#   --cpus     virtual CPUs (default 2). vkms in Linux 6.1 can deadlock the guest on two:
+#              its vblank disable cancels its timer under the lock its timer callback
+#              takes (drm_vblank_disable_and_save -> hrtimer_cancel, while the callback
+#              spins in drm_handle_vblank on vblank_time_lock); on one CPU it cannot.
 #   --qemu-arg one more qemu argument (e.g. "-device" "qemu-xhci"). Repeatable.
 # COMMAND runs in the current directory, with PATH, HOME, LANG and every GTEST_*,
 # ENDOTOWER_* and ASAN/UBSAN/TSAN_OPTIONS variable of the caller; its stdout and
@@ -33,6 +37,7 @@ qemu_args=()
 cache=$repo/build/vhw
 timeout_s=600
 mem=2G
+cpus=2
 say() { echo "run-in-guest: $*" >&2; }
 usage() { say "usage: run-in-guest.sh [--modules \"M...\"] [--share DIR] [--cache DIR] [--timeout S] -- COMMAND..."; exit 2; }
 while [ $# -gt 0 ]; do
@@ -42,6 +47,7 @@ while [ $# -gt 0 ]; do
         --cache) [ $# -ge 2 ] || usage; cache=$2; shift 2 ;;
         --timeout) [ $# -ge 2 ] || usage; timeout_s=$2; shift 2 ;;
         --mem) [ $# -ge 2 ] || usage; mem=$2; shift 2 ;;
+        --cpus) [ $# -ge 2 ] || usage; cpus=$2; shift 2 ;;
         --qemu-arg) [ $# -ge 2 ] || usage; qemu_args+=("$2"); shift 2 ;;
         --) shift; break ;;
         *) say "unknown option '$1'"; usage ;;
@@ -127,7 +133,7 @@ STAGE2
 } >"$results/guest.sh"
 
 t0=$(date +%s.%N)
-timeout --foreground -k 5 "$timeout_s" "$qemu" -machine q35 -accel tcg,thread=multi -cpu max -smp 2 -m "$mem" \
+timeout --foreground -k 5 "$timeout_s" "$qemu" -machine q35 -accel tcg,thread=multi -cpu max -smp "$cpus" -m "$mem" \
     -nographic -no-reboot -nic none -monitor none \
     -kernel "$guest/vmlinux" -initrd "$guest/initramfs.cpio" \
     -append "console=ttyS0 rdinit=/init panic=-1 quiet loglevel=4 mitigations=off" \
