@@ -91,14 +91,20 @@ static bool run_bar(int from, int n, int width, int width_index, const RimBarPar
 bool RimBarSearch::measure(const Line& l, int wi, bool reverse, RimBar& out) const {
     const int w = params_.widths[wi], off = (w + 1) / 2 + 1 + w / 2;
     const int lo = -off - w / 2, hi = off - w / 2 + w - 1;  // the footprint, across
+    // The scan's sampling (16.16 fixed point from the row's start), so that a line
+    // measured again reads the pixels its scan read.
+    constexpr double kOne = 65536.0;
+    const auto fnx = static_cast<std::int64_t>(std::llround(l.nx * kOne)),
+               fny = static_cast<std::int64_t>(std::llround(l.ny * kOne));
     auto point_at = [&](int s, std::uint8_t& f, int& contrast, int& level) {
         const int t = reverse ? d_ - 1 - s : s;
+        const auto fx0 = static_cast<std::int64_t>(std::floor((l.ox + t * l.dx + 0.5) * kOne)),
+                   fy0 = static_cast<std::int64_t>(std::floor((l.oy + t * l.dy + 0.5) * kOne));
         int strip = 0, left = 0, right = 0, lit = 0;
         for (int j = lo; j <= hi; ++j) {
-            const double x = l.ox + (l.column + j) * l.nx + t * l.dx,
-                         y = l.oy + (l.column + j) * l.ny + t * l.dy;
-            const int xi = static_cast<int>(std::floor(x + 0.5)),
-                      yi = static_cast<int>(std::floor(y + 0.5));
+            const std::int64_t c = l.column + j;
+            const auto xi = static_cast<int>((fx0 + c * fnx) >> 16),
+                       yi = static_cast<int>((fy0 + c * fny) >> 16);
             if (xi < 0 || yi < 0 || xi >= w_ || yi >= h_) continue;
             const std::size_t i = static_cast<std::size_t>(yi) * w_ + xi;
             lit += lit_[i];
