@@ -20,6 +20,17 @@ bool same_bar(const RimBar& a, const RimBar& b) {
            segment_distance(b.rim, b.tip, a.tip.x, a.tip.y) < near;
 }
 
+// Narrows [lo, hi] to the steps p at which o + p d rounds to a pixel of a picture `size`
+// wide ([-0.5, size - 0.5]), widened by `margin` either side; empty (lo > hi) when none.
+void clip_to_picture(double o, double d, int size, double margin, double& lo, double& hi) {
+    if (std::abs(d) < 1e-12) {
+        if (o < -0.5 || o > size - 0.5) lo = 1, hi = 0;
+        return;
+    }
+    const double a = (-0.5 - o) / d, b = (size - 0.5 - o) / d;
+    lo = std::max(lo, std::min(a, b) - margin), hi = std::min(hi, std::max(a, b) + margin);
+}
+
 }  // namespace
 
 // A line of the scan: point(c + j, t) = origin + (c + j) n + t d, in half-size px.
@@ -122,16 +133,8 @@ bool RimBarSearch::measure(const Line& l, int wi, bool reverse, RimBar& out) con
     };
     // Before the line's centre enters the picture no footprint is lit: start there.
     double t_in = 0, t_out = d_ - 1;
-    auto clip = [&](double o, double d, int size) {
-        if (std::abs(d) < 1e-12) {
-            if (o < -0.5 || o > size - 0.5) t_in = 1, t_out = 0;
-            return;
-        }
-        const double a = (-0.5 - o) / d, b = (size - 0.5 - o) / d;
-        t_in = std::max(t_in, std::min(a, b)), t_out = std::min(t_out, std::max(a, b));
-    };
-    clip(l.ox + l.column * l.nx, l.dx, w_);
-    clip(l.oy + l.column * l.ny, l.dy, h_);
+    clip_to_picture(l.ox + l.column * l.nx, l.dx, w_, 0, t_in, t_out);
+    clip_to_picture(l.oy + l.column * l.ny, l.dy, h_, 0, t_in, t_out);
     if (t_in > t_out) return false;
     const int from = reverse ? std::max(0, d_ - 2 - static_cast<int>(std::ceil(t_out)))
                              : std::max(0, static_cast<int>(std::floor(t_in)) - 1);
@@ -165,16 +168,8 @@ void RimBarSearch::scan(int orientation) {
         const double x0 = base.ox + t * base.dx, y0 = base.oy + t * base.dy;
         // The columns whose point lies in the picture (a margin of one for rounding).
         double c_lo = 0, c_hi = d_ - 1;
-        auto clip = [&](double o, double n, int size) {
-            if (std::abs(n) < 1e-12) {
-                if (o < -0.5 || o > size - 0.5) c_lo = 1, c_hi = 0;
-                return;
-            }
-            const double a = (-0.5 - o) / n, b = (size - 0.5 - o) / n;
-            c_lo = std::max(c_lo, std::min(a, b) - 1), c_hi = std::min(c_hi, std::max(a, b) + 1);
-        };
-        clip(x0, base.nx, w_);
-        clip(y0, base.ny, h_);
+        clip_to_picture(x0, base.nx, w_, 1, c_lo, c_hi);
+        clip_to_picture(y0, base.ny, h_, 1, c_lo, c_hi);
         const int first = std::max(0, static_cast<int>(std::floor(c_lo))),
                   last = std::min(d_ - 1, static_cast<int>(std::ceil(c_hi)));
         // Nearest pixel by 16.16 fixed point steps (the shift floors negatives too).
