@@ -46,10 +46,14 @@ run_pid=$!
 # Starting takes seconds under emulation (libraries over 9p, llvmpipe): wait for it.
 for i in $(seq 1 120); do grep -q "atomic commits" "$out/run.log" && break; sleep 0.5; done
 sleep 3
+# Each step waits for the firmware's own line, up to 60 s: under emulation on a loaded
+# host the fixed 4 s once passed before the loss was noticed.
+wait_for() { for i in $(seq 1 120); do grep -q "$1" "$out/run.log" && return 0; sleep 0.5; done; return 1; }
 v4l2-ctl -d /dev/video0 -c dv_timings_signal_mode=1 >/dev/null 2>&1 || fail "vivid: cannot drop the signal"
-sleep 4
+wait_for "no signal from the capture input; showing the no-signal screen"
 v4l2-ctl -d /dev/video0 -c dv_timings_signal_mode=0 >/dev/null 2>&1
-sleep 4
+wait_for "capture signal is back"
+sleep 1
 kill -INT $run_pid
 wait $run_pid
 rc=$?
