@@ -155,6 +155,24 @@ TEST_F(V4l2Guest, NoSignalGivesTimeoutsAndCaptureResumes) {
     cap.release(f);
 }
 
+// Started while the receiver has no signal (fixed timings are set all the same): no
+// frame of the receiver's noise, timeouts until the signal comes.
+TEST_F(V4l2Guest, StartedWithoutASignalGivesTimeoutsUntilItComes) {
+    ctl("-c dv_timings_signal_mode=1");  // "No Signal"
+    V4l2Capture cap(hdmi_1080p60());
+    ASSERT_TRUE(cap.start()) << cap.error();
+    EXPECT_FALSE(cap.stats().signal);
+    hal::Frame f;
+    for (int i = 0; i < 5; ++i)
+        ASSERT_EQ(cap.next(f, 200 * hal::kMillisecond), hal::SourceStatus::kTimeout)
+            << "a frame at call " << i << " while there is no signal";
+    ctl("-c dv_timings_signal_mode=0");
+    ASSERT_EQ(next_not_timeout(cap, f), hal::SourceStatus::kFrame) << cap.error();
+    EXPECT_TRUE(cap.stats().signal);
+    EXPECT_EQ(f.format.width, 1920);
+    cap.release(f);
+}
+
 TEST_F(V4l2Guest, SourceFormatChangeRestartsAtTheNewSize) {
     V4l2Capture cap(hdmi_1080p60());
     ASSERT_TRUE(cap.start()) << cap.error();

@@ -309,8 +309,18 @@ struct V4l2Capture::Impl {
 
     bool configure() {
         if (dv && !set_dv_timings()) return false;
-        stats.signal = true;
+        // Fixed timings are set whether or not the receiver sees a signal: ask it, so
+        // that a capture started without one drops the receiver's noise (the no-signal
+        // screen) until a SOURCE_CHANGE says the signal is there.
+        stats.signal = !dv || receiver_locked();
         return set_format() && map_buffers();
+    }
+
+    // False only when the receiver says it has no signal (or cannot lock to it).
+    bool receiver_locked() {
+        v4l2_dv_timings t{};
+        if (xioctl(VIDIOC_QUERY_DV_TIMINGS, &t) == 0) return true;
+        return errno != ENOLINK && errno != ENOLCK && errno != ERANGE;
     }
 
     void device_gone() {
