@@ -33,34 +33,9 @@ bool BlockMean::configure(int src_width, int src_height, int dst_width, int dst_
 
 namespace {
 
-// (s + 4) / 9 as a multiplication: exact for every 3 x 3 sum of bytes.
-constexpr unsigned mean9(unsigned s) {
-    return ((s + 4) * 7282u) >> 16;
-}
-constexpr bool mean9_exact() {
-    for (unsigned s = 0; s <= 9 * 255; ++s)
-        if (mean9(s) != (s + 4) / 9) return false;
-    return true;
-}
-static_assert(mean9_exact());
-
-// One output row for k = 3, three channels: the sums of three neighbouring pixels'
-// column sums for every position (vectorised), then every third pixel's.
-void row_means_3x3(const std::uint16_t* columns, int width, std::uint16_t* sums,
-                   std::uint8_t* out) {
-    const int n = width * 9 - 6;
-    for (int i = 0; i < n; ++i)
-        sums[i] = static_cast<std::uint16_t>(columns[i] + columns[i + 3] + columns[i + 6]);
-    for (int x = 0; x < width; ++x, sums += 9, out += 3) {
-        out[0] = static_cast<std::uint8_t>(mean9(sums[0]));
-        out[1] = static_cast<std::uint8_t>(mean9(sums[1]));
-        out[2] = static_cast<std::uint8_t>(mean9(sums[2]));
-    }
-}
-
 // One output row for a factor K known at compile time, three channels: the sums of K
-// neighbouring pixels' column sums for every position (vectorised, as for 3 x 3), then
-// every K-th pixel's mean from the table. 1920 -> 320 px is K = 6.
+// neighbouring pixels' column sums for every position (vectorised), then every K-th
+// pixel's mean from the table. 1920 -> 320 px is K = 6.
 template <int K>
 void row_means_k3(const std::uint16_t* columns, int width, std::uint16_t* sums,
                   const std::uint8_t* mean, std::uint8_t* out) {
@@ -104,7 +79,7 @@ void BlockMean::run(const std::uint8_t* src, std::size_t src_stride, std::uint8_
                 col[i] = static_cast<std::uint16_t>(col[i] + row[i]);
         }
         if (k == 3 && channels_ == 3)
-            row_means_3x3(col, dst_width_, sums_.data(), dst);
+            row_means_k3<3>(col, dst_width_, sums_.data(), mean_.data(), dst);
         else if (k == 6 && channels_ == 3)
             row_means_k3<6>(col, dst_width_, sums_.data(), mean_.data(), dst);
         else if (k == 4 && channels_ == 3)
