@@ -12,9 +12,15 @@
 #include <cstdlib>
 #include <new>
 
+// GCC names its sanitizers with macros, clang (the sanitizer presets) with __has_feature.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define ENDOTOWER_SANITIZED 1
-#else
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define ENDOTOWER_SANITIZED 1
+#endif
+#endif
+#ifndef ENDOTOWER_SANITIZED
 #define ENDOTOWER_SANITIZED 0
 #endif
 
