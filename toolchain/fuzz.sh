@@ -11,11 +11,18 @@ seconds=${1:-60}
 cd "$root"
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
-for t in $(ls tests/fuzz/corpus); do  # one corpus folder per target fuzz_NAME
-  work="build/fuzz/corpus-$t"
+# One target per core at a time (each target is one process), corpus folder NAME for
+# target fuzz_NAME; its log in build/fuzz/NAME.log.
+fuzz_one() {
+  local t=$1 work="build/fuzz/corpus-$1" log="build/fuzz/$1.log" status=0
   rm -rf "$work" && mkdir -p "$work" && cp tests/fuzz/corpus/$t/* "$work/"
-  echo "fuzz_$t: ${seconds} s"
   "build/fuzz/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=20 -max_len=70000 \
-    -artifact_prefix="build/fuzz/" -print_final_stats=1 "$work" 2>&1 | grep -E "^(stat::number_of_executed_units|Done|==.*ERROR|SUMMARY)" || true
-  test "${PIPESTATUS[0]}" -eq 0
-done
+    -artifact_prefix="build/fuzz/" -print_final_stats=1 "$work" >"$log" 2>&1 || status=$?
+  echo "fuzz_$t: ${seconds} s, exit $status"
+  grep -E "^(stat::number_of_executed_units|Done|==.*ERROR|SUMMARY)" "$log" || true
+  return "$status"
+}
+# xargs runs them and exits non-zero when any of them did.
+export -f fuzz_one
+export seconds
+ls tests/fuzz/corpus | xargs -P "${JOBS:-$(nproc)}" -I{} bash -c 'fuzz_one "$1"' _ {}
