@@ -8,10 +8,14 @@
 #    host's dpkg database: libopencv-dev and libyaml-cpp-dev are not Multi-Arch: same,
 #    so installing their arm64 packages would remove the host's amd64 ones.
 # Usage: install-cross-deps.sh [SYSROOT]   (default: build/sysroot-arm64)
+#        install-cross-deps.sh --host-tools  (only the host tools; CI installs them first
+#        and then makes the sysroot beside its other steps, which use the host's apt)
 # Safe to run again: the sysroot is rebuilt only when the package list changed.
 set -euo pipefail
 
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+host_only=0
+if [ "${1:-}" = --host-tools ]; then host_only=1; shift; fi
 sysroot=${1:-$repo/build/sysroot-arm64}
 state=$sysroot.apt
 
@@ -42,6 +46,7 @@ if [ ${#missing[@]} -gt 0 ]; then
   "${sudo[@]}" apt-get update -q
   "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
+if [ "$host_only" = 1 ]; then exit 0; fi
 
 want="3 ${target_packages[*]}"  # bump the leading number when the unpacking changes
 if [ -f "$sysroot/.endotower-packages" ] && [ "$(cat "$sysroot/.endotower-packages")" = "$want" ]; then
