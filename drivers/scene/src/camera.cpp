@@ -1,5 +1,6 @@
 #include "endotower/scene/camera.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace endotower::scene {
@@ -55,12 +56,23 @@ void CameraModel::distort(double xu, double yu, double& xd, double& yd) const {
 }
 
 double CameraModel::max_undistorted_radius() const {
+    // The ground truth asks this for every point it projects (thousands a frame) and the
+    // search below takes up to 8 (w + h) steps: the last answer is kept per thread, for
+    // the same distortion and size.
+    thread_local std::vector<double> last_k;
+    thread_local int last_w = -1, last_h = -1;
+    thread_local double last_r = 0;
+    if (width == last_w && height == last_h && k == last_k) return last_r;
     // The first zero of d(r_d)/d(r_u), searched outwards; far beyond any image if none.
     const double limit = 4.0 * (width + height);
     double r = 0;
     for (const double step = 0.5; r < limit; r += step)
-        if (slope(k, (r + step) * (r + step)) <= 0) return r;
-    return limit;
+        if (slope(k, (r + step) * (r + step)) <= 0) break;
+    last_k = k;
+    last_w = width;
+    last_h = height;
+    last_r = std::min(r, limit);
+    return last_r;
 }
 
 bool CameraModel::undistort(double xd, double yd, double& xu, double& yu) const {

@@ -1,6 +1,7 @@
 #include "endotower/scene/renderer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -35,6 +36,8 @@ struct SceneRenderer::Impl {
     std::vector<std::uint16_t> ids;
     std::vector<std::uint8_t> edge;
     std::uint8_t lut[kLut];
+    // Sensor noise added to a byte for each sum of four random bytes (0 .. 1020).
+    std::array<int, 1021> noise_step{};
 
     bool init(const Scenario& s, std::uint64_t seed, std::string& error);
     Vec3 ray_at(double x, double y) const;
@@ -81,6 +84,10 @@ bool SceneRenderer::Impl::init(const Scenario& s, std::uint64_t seed, std::strin
         const double srgb = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
         lut[i] = static_cast<std::uint8_t>(std::lround(std::clamp(srgb, 0.0, 1.0) * 255));
     }
+    const double sigma = model.sc.noise / 147.8;  // four bytes sum: sd 147.8, near-Gaussian
+    for (int sum = 0; sum <= 1020; ++sum)
+        noise_step[static_cast<std::size_t>(sum)] =
+            static_cast<int>(std::lround((sum - 510) * sigma));
     if (s.smoke > 0) {
         // Screen-space haze: smooth noise twice the frame, scrolled over time.
         Rng rng(stream_seed(seed, kTagSmoke));
@@ -420,7 +427,7 @@ void SceneRenderer::Impl::render(int index, Image& image, FrameTruth& truth) {
     image.width = w;
     image.height = h;
     image.bgr.resize(static_cast<std::size_t>(w) * h * 3);
-    const double sigma = sc.noise / 147.8;  // sum of four bytes: sd 147.8, near-Gaussian
+    const bool noisy = sc.noise > 0;
     std::uint64_t bits = 0;
     int left = 0;
     std::mt19937_64 eng(stream_seed(model.seed, kTagNoise, static_cast<std::uint64_t>(index)));
@@ -431,7 +438,7 @@ void SceneRenderer::Impl::render(int index, Image& image, FrameTruth& truth) {
             // Per pixel: truncating x + 0.5 is the cheap rounding, and it is clamped.
             // NOLINTNEXTLINE(bugprone-incorrect-roundings)
             int v = lut[std::clamp(static_cast<int>(p[x] * (kLut - 1) + 0.5f), 0, kLut - 1)];
-            if (sigma > 0) {
+            if (noisy) {
                 if (left == 0) {
                     bits = eng();
                     left = 2;
@@ -440,7 +447,7 @@ void SceneRenderer::Impl::render(int index, Image& image, FrameTruth& truth) {
                                                  ((bits >> 16) & 0xFF) + ((bits >> 24) & 0xFF));
                 bits >>= 32;
                 --left;
-                v += static_cast<int>(std::lround((sum - 510) * sigma));
+                v += noise_step[static_cast<std::size_t>(sum)];
             }
             o[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
         }
@@ -455,9 +462,12 @@ void SceneRenderer::tool_labels(std::vector<std::uint8_t>& out) const {
     for (std::size_t i = 0; i < ids.size(); ++i) {
         const int id = ids[i];
         // Tool surfaces are 10 + 8 * tool + (0..7) (world.cpp); distractors from 100.
-        if (weight[i] <= 0) out[i] = 0;
-        else if (id == 0xFFFF) out[i] = kMixedLabel;
-        else out[i] = id >= 10 && id < 100 ? static_cast<std::uint8_t>((id - 10) / 8 + 1) : 0;
+        if (weight[i] <= 0)
+            out[i] = 0;
+        else if (id == 0xFFFF)
+            out[i] = kMixedLabel;
+        else
+            out[i] = id >= 10 && id < 100 ? static_cast<std::uint8_t>((id - 10) / 8 + 1) : 0;
     }
 }
 
