@@ -60,6 +60,13 @@ constexpr double kContinuationCost = 2.0;
 // tool (measured then only up to the prediction): a crossing's tip reappears within a
 // few frames, a tip at rest must not creep on.
 constexpr double kHiddenVelocityDamping = 0.8;
+// Across a band: the share of tool-coloured points between the band and the rim (as a
+// bar from the rim needs, RimBarParams::min_fill), and how far the region beyond the band
+// may turn from the line (its axis is skewed by whatever joins it along the rim).
+constexpr double kBridgeFill = 0.7, kBridgeTurnDeg = 30.0;
+// The axis near the tip: fitted to the region's pixels within this share of its length
+// from the tip (the half of it nearer the tip).
+constexpr double kTipAxisReach = 0.5;
 
 double angle_diff_deg(double a, double b) {
     return std::abs(std::remainder(a - b, 360.0));
@@ -73,6 +80,15 @@ struct Px {
 
 struct RimPixel {
     double angle, x, y;
+};
+
+// An elongated, solid region that does not reach the rim: a tool's jaws and the end of
+// its shaft cut off from the rest by a band across it (a marker ring, a crossing
+// instrument), or tissue. Analysis px.
+struct Floating {
+    std::array<Point2, 2> ends;
+    double ux = 1, uy = 0;  // the principal axis, from ends[0] towards ends[1]
+    double area = 0, length = 0, width = 0, confidence = 0;
 };
 
 struct Line {
@@ -100,6 +116,31 @@ bool fit_axis(const Px* begin, const Px* end, Pred use, Line& out, double& n, do
     const double a = 0.5 * std::atan2(2 * cxy, cxx - cyy);
     out = {mx, my, std::cos(a), std::sin(a)};
     return true;
+}
+
+// The axis near a region's tip (docs/tracking.md, "The axis near the tip"): the
+// principal axis of its pixels within kTipAxisReach of its length from the tip, where the
+// ray from the tip along it runs through more of the region (within half a width) than
+// the ray towards the rim end. Something joined to the shaft at the rim (a band along
+// the edge of the picture) skews the whole region's axis; something joined near the tip
+// (the other tool of a crossing), the near part's.
+double tip_axis(const Px* begin, const Px* end, const Candidate& c) {
+    double n = 0, l1 = 0, l2 = 0;
+    Line near;
+    const double reach = kTipAxisReach * c.length;
+    auto within = [&](const Px* p) { return std::hypot(p->x - c.tip.x, p->y - c.tip.y) <= reach; };
+    if (!fit_axis(begin, end, within, near, n, l1, l2)) return c.axis_deg;
+    double ux = near.ux, uy = near.uy;
+    if ((near.px - c.tip.x) * ux + (near.py - c.tip.y) * uy < 0) ux = -ux, uy = -uy;
+    const double a = c.axis_deg * M_PI / 180.0, vx = std::cos(a), vy = std::sin(a);
+    const double half = std::max(1.5, 0.5 * c.width);
+    int along_near = 0, along_whole = 0;
+    for (const Px* p = begin; p != end; ++p) {
+        const double dx = p->x - c.tip.x, dy = p->y - c.tip.y;
+        along_near += dx * ux + dy * uy >= 0 && std::abs(dx * uy - dy * ux) <= half;
+        along_whole += dx * vx + dy * vy >= 0 && std::abs(dx * vy - dy * vx) <= half;
+    }
+    return along_near > along_whole ? std::atan2(uy, ux) * 180.0 / M_PI : c.axis_deg;
 }
 
 // Grey (mean of B, G, R) at a sub-pixel position of a BGR image, bilinear.
@@ -178,6 +219,7 @@ struct LikelihoodToolTracker::Work {
     std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last) into entries
     std::vector<std::uint8_t> owner;                        // per region pixel: which line
     std::vector<Candidate> candidates;
+    std::vector<Floating> floating;
     std::array<Track, ToolTracker::kMaxTools> tracks{};
     double fov_cx = 0, fov_cy = 0, fov_r = 0;
     detail::RimBarSearch bars;
@@ -221,7 +263,9 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     // at most kMaxTools.
     const double f = params_.min_area_fraction;
     const std::size_t large = f > 0 ? static_cast<std::size_t>(1.0 / f) + 1 : regions;
-    w.candidates.reserve(kMaxTools * std::min(large, regions) + 6);
+    // ... and the floating regions that continue one across a band, and the bars.
+    w.floating.reserve(std::min(large, regions));
+    w.candidates.reserve(kMaxTools * std::min(large, regions) + w.floating.capacity() + 6);
     w.bars.configure(sw, sh);
     for (Track& t : w.tracks) t = Track{};
 }
@@ -307,6 +351,7 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
         return std::min<double>({rim, x + 1, y + 1, W - x, H - y});
     };
     w.candidates.clear();
+    w.floating.clear();
     const std::size_t nt = std::min(params_.max_tools, kMaxTools);
     for (std::size_t t = 0; t < nt; ++t)
         if (w.tracks[t].id >= 0) {
@@ -319,6 +364,40 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     const bool two_tracks = nt == 2 && w.tracks[0].id >= 0 && w.tracks[1].id >= 0;
     const double min_area = params_.min_area_fraction * W * H,
                  touch = params_.border_touch_fraction * W;
+    // A region off the rim that is elongated and solid like a tool: its two ends (the
+    // mean of its pixels within 3 % of the length of each extreme) along its axis.
+    auto measure_floating = [&](const Px* begin, const Px* end, Floating& f) {
+        double n = 0, l1 = 0, l2 = 0;
+        Line axis;
+        if (!fit_axis(
+                begin, end, [](const Px*) { return true; }, axis, n, l1, l2) ||
+            l2 <= 0 || std::sqrt(l1 / l2) < params_.min_elongation)
+            return false;
+        double lo = std::numeric_limits<double>::max(), hi = -lo, psum = 0, solid = 0;
+        for (const Px* p = begin; p != end; ++p) {
+            const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+            lo = std::min(lo, t), hi = std::max(hi, t);
+            psum += w.prob.at<std::uint8_t>(p->y, p->x);
+            solid += w.raw.at<std::uint8_t>(p->y, p->x) >= params_.threshold;
+        }
+        if (solid < params_.min_solid_fraction * n) return false;
+        const double band = std::max(1.0, 0.03 * (hi - lo));
+        std::array<double, 2> m{};
+        f.ends[0] = f.ends[1] = {};
+        for (const Px* p = begin; p != end; ++p) {
+            const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+            for (int k = 0; k < 2; ++k)
+                if (k == 0 ? t <= lo + band : t >= hi - band)
+                    f.ends[k].x += p->x, f.ends[k].y += p->y, m[k] += 1;
+        }
+        for (int k = 0; k < 2; ++k) f.ends[k] = {f.ends[k].x / m[k], f.ends[k].y / m[k]};
+        f.ux = axis.ux, f.uy = axis.uy;
+        f.area = n;
+        f.length = std::max(1.0, hi - lo);
+        f.width = n / f.length;
+        f.confidence = std::clamp(psum / n / 255.0, 0.0, 1.0);
+        return true;
+    };
     for (int i = 1; i < n; ++i) {
         const Px* begin = w.pixels.data() + w.offsets[i];
         const Px* end = w.pixels.data() + w.offsets[i + 1];
@@ -330,7 +409,14 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             if (rim_distance(p->x, p->y) <= touch)
                 w.entries.push_back(
                     {std::atan2(p->y - w.fov_cy, p->x - w.fov_cx), double(p->x), double(p->y)});
-        if (w.entries.empty()) continue;  // not entering from outside the picture
+        if (w.entries.empty()) {
+            // Not entering from outside the picture: kept where it may be a tool's end
+            // cut off by a band across the shaft ("Across a band", below).
+            Floating f;
+            if (params_.bridge_widths > 0 && measure_floating(begin, end, f))
+                w.floating.push_back(f);
+            continue;
+        }
         std::sort(w.entries.begin(), w.entries.end(),
                   [](const RimPixel& a, const RimPixel& b) { return a.angle < b.angle; });
         // Runs of entry pixels: a gap along the rim longer than `touch` starts a new one.
@@ -540,9 +626,94 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             c.axis_deg = c.track >= 0 ? std::remainder(w.tracks[c.track].angle.position(), 360.0)
                                       : std::atan2(c.rim_end.y - c.tip.y, c.rim_end.x - c.tip.x) *
                                             180.0 / M_PI;
+            if (params_.tip_axis && c.track < 0 && lines == 1) c.axis_deg = tip_axis(begin, end, c);
             w.candidates.push_back(c);
         }
     }
+    // Across a band (docs/tracking.md, "Across a band"): a marker ring or a crossing
+    // instrument cuts a shaft in two, the part with the jaws off the rim. A floating
+    // region is that tool's end when the line of its axis, beyond one end, crosses a
+    // gap of at most `bridge_widths` widths below even odds and then runs on to the rim
+    // over tool-coloured pixels (at least kBridgeFill of the points: the most likely
+    // within half a width aside). It is then a tool from its other end to the rim, in
+    // place of the region it continues (a region whose tip lies along that line).
+    const std::size_t region_count = w.candidates.size();
+    bool bridged = false;  // a tool the regions missed: rank by support, as for a bar
+    for (const Floating& f : w.floating) {
+        const int half = std::max(1, static_cast<int>(std::lround(0.5 * f.width)));
+        auto likely = [&](double x, double y, double ux, double uy) {
+            int best = 0;
+            for (int o = -half; o <= half; ++o) {
+                const int xi = std::clamp(static_cast<int>(std::lround(x - o * uy)), 0, W - 1),
+                          yi = std::clamp(static_cast<int>(std::lround(y + o * ux)), 0, H - 1);
+                best = std::max<int>(best, w.prob.at<std::uint8_t>(yi, xi));
+            }
+            return best >= params_.threshold;
+        };
+        int through = -1;  // the end the line leaves by towards the rim
+        Point2 rim_point;
+        for (int k = 0; k < 2; ++k) {
+            const double ux = k == 1 ? f.ux : -f.ux, uy = k == 1 ? f.uy : -f.uy;
+            const Point2 from = f.ends[k];
+            int state = 0, gap = 0, points = 0, good = 0;  // 0 own end, 1 gap, 2 beyond
+            bool reached = false;
+            Point2 at;
+            for (int step = 1; step < W + H; ++step) {
+                at = {from.x + step * ux, from.y + step * uy};
+                const double x = at.x, y = at.y;
+                if (x < 0 || y < 0 || x > W - 1 || y > H - 1) break;
+                if (rim_distance(x, y) <= touch) {
+                    reached = true;
+                    break;
+                }
+                const bool lit = likely(x, y, ux, uy);
+                if (state == 0 && !lit) state = 1;
+                if (state == 1 && lit) state = 2;
+                if (state == 1 && ++gap > params_.bridge_widths * f.width) break;
+                if (state == 2) ++points, good += lit;
+            }
+            if (!reached || points < 2 * f.width || good < kBridgeFill * points) continue;
+            if (through >= 0) {  // tool-coloured both ways: not a tool's end
+                through = -1;
+                break;
+            }
+            through = k;
+            rim_point = at;  // where the line comes within `touch` of the rim
+        }
+        if (through < 0) continue;
+        Candidate c;
+        c.tip = f.ends[1 - through];
+        c.rim_end = rim_point;
+        c.length = std::hypot(c.rim_end.x - c.tip.x, c.rim_end.y - c.tip.y);
+        c.width = c.shaft_width = f.width;
+        c.area = f.area;  // ranks by what was seen; a region it continues adds its own
+        c.confidence = f.confidence;
+        c.axis_deg = std::atan2(c.rim_end.y - c.tip.y, c.rim_end.x - c.tip.x) * 180.0 / M_PI;
+        // The region beyond the band is this tool's shaft: replaced (the first such),
+        // or dropped (any other).
+        bool placed = false;
+        for (std::size_t k = 0; k < region_count; ++k) {
+            Candidate& r = w.candidates[k];
+            if (r.area <= 0 || r.split ||
+                std::abs(std::remainder(r.axis_deg - c.axis_deg, 180.0)) > kBridgeTurnDeg ||
+                segment_distance(f.ends[through], c.rim_end, r.tip.x, r.tip.y) >
+                    2 * std::max(r.width, c.width))
+                continue;
+            if (placed) {
+                r.area = 0;  // removed below
+            } else {
+                const double area = r.area + c.area;
+                r = c;
+                r.area = area;
+                placed = true;
+            }
+        }
+        if (!placed) {
+            w.candidates.push_back(c);
+            bridged = true;
+        }
+    }
+    std::erase_if(w.candidates, [](const Candidate& c) { return c.area <= 0; });
     // Identities: candidates to live tracks, the assignment of least summed cost (tip
     // distance to the prediction in widths, plus the turn of the axis in units of
     // kAngleGateDeg); a candidate cut out by a track's prediction belongs to it.
@@ -566,15 +737,15 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     // bar along no region is a tool the regions missed (a dark shaft in shadow). Where
     // such a bar is added, the tools with the longest straight support win, not the
     // largest.
-    bool added = false;
+    bool added = bridged;
+    // A region's own length is its support; a part of a region two tools share keeps
+    // its place (its length is cut by the other tool, and it has a track).
+    for (Candidate& c : w.candidates)
+        c.support = c.split ? std::numeric_limits<double>::max() : c.length;
     if (params_.rim_bars) {
         const std::span<const detail::RimBar> bars =
             w.bars.search(w.prob.ptr<std::uint8_t>(0), w.eroded.ptr<std::uint8_t>(0), w.prob.step);
         const std::size_t regions = w.candidates.size();
-        // A region's own length is its support; a part of a region two tools share keeps
-        // its place (its length is cut by the other tool, and it has a track).
-        for (Candidate& c : w.candidates)
-            c.support = c.split ? std::numeric_limits<double>::max() : c.length;
         for (const detail::RimBar& b : bars) {
             const double axis = std::atan2(b.rim.y - b.tip.y, b.rim.x - b.tip.x) * 180.0 / M_PI;
             bool along = false;

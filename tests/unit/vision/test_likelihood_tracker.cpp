@@ -595,5 +595,72 @@ TEST(LikelihoodToolTracker, ADarkShaftIsReportedWithinEightFramesFromAnySide) {
     }
 }
 
+// The trained grey-against-red model of make_tracker, with other parameters.
+LikelihoodToolTracker make_tracker_with(LikelihoodToolTrackerParams params) {
+    std::vector<std::uint8_t> labels;
+    cv::Mat img = scope_frame({{{300, 250}, 200, 24}}, &labels);
+    ToolLikelihood m;
+    m.add(view(img), labels.data());
+    std::string error;
+    EXPECT_TRUE(m.finish(error)) << error;
+    return LikelihoodToolTracker(m, params);
+}
+
+// One frame through a fresh tracker: the tools found.
+std::vector<ToolEstimate> track_once(LikelihoodToolTracker& tracker, cv::Mat& img) {
+    tracker.configure(view(img).format);
+    std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+    const std::size_t n = tracker.track(view(img), out);
+    return {out.begin(), out.begin() + static_cast<std::ptrdiff_t>(n)};
+}
+
+// sznitman_lap's dark tool under a grey strip along the top of the picture: the
+// region is a T, whose principal axis leans towards the strip. The tool's direction is
+// that of the half of the region nearer its tip (docs/tracking.md, "The axis near the
+// tip").
+TEST(LikelihoodToolTracker, TheAxisNearTheTipIsTheShaftsWhereABandAlongTheRimJoinsIt) {
+    const Shaft s{{408, 260}, -110, 24};
+    cv::Mat img = scope_frame({s});
+    // A band 14 px wide along the rim from 220 to 276 degrees (the top left), which the
+    // shaft meets at its end (at about 272 degrees).
+    cv::ellipse(img, {320, 240}, {217, 217}, 0, 220, 276, cv::Scalar(128, 126, 124), 14);
+    LikelihoodToolTrackerParams whole;
+    whole.tip_axis = false;
+    LikelihoodToolTracker old_rule = make_tracker_with(whole), tracker = make_tracker_with({});
+    const std::vector<ToolEstimate> skewed = track_once(old_rule, img),
+                                    found = track_once(tracker, img);
+    ASSERT_EQ(skewed.size(), 1u);
+    ASSERT_EQ(found.size(), 1u);
+    EXPECT_GT(angle_diff(skewed[0].axis_deg, s.dir_deg), 20.0);  // the whole region's axis
+    EXPECT_LT(angle_diff(found[0].axis_deg, s.dir_deg), 2.0);
+    EXPECT_LT(std::hypot(found[0].tip.x - s.tip.x, found[0].tip.y - s.tip.y), 6.0);
+}
+
+// A band of tissue colour across a shaft (a marker ring, an instrument crossing it) cuts
+// off its jaws' end: one tool to the tip across a band up to two widths, not across
+// three (docs/tracking.md, "Across a band").
+TEST(LikelihoodToolTracker, AShaftCutByABandOfUpToTwoWidthsIsOneToolToItsTip) {
+    const Shaft s{{320, 340}, -90, 24};
+    for (const int band : {16, 40, 72}) {  // 0.7, 1.7 and 3 widths
+        cv::Mat img = scope_frame({s});
+        cv::rectangle(img, cv::Rect(300, 270 - band, 41, band), cv::Scalar(60, 50, 190), -1);
+        LikelihoodToolTrackerParams off;
+        off.bridge_widths = 0;
+        LikelihoodToolTracker unbridged = make_tracker_with(off), tracker = make_tracker_with({});
+        const std::vector<ToolEstimate> cut = track_once(unbridged, img),
+                                        found = track_once(tracker, img);
+        // Without the rule: the part from the rim, ending at the band.
+        ASSERT_EQ(cut.size(), 1u) << band;
+        EXPECT_NEAR(cut[0].tip.y, 270 - band, 6.0) << band;
+        ASSERT_EQ(found.size(), 1u) << band;
+        EXPECT_LT(angle_diff(found[0].axis_deg, s.dir_deg), 2.0) << band;
+        if (band <= 2 * s.width) {
+            EXPECT_LT(std::hypot(found[0].tip.x - s.tip.x, found[0].tip.y - s.tip.y), 6.0) << band;
+        } else {
+            EXPECT_NEAR(found[0].tip.y, 270 - band, 6.0) << band;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace endotower::vision

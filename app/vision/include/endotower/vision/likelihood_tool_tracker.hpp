@@ -18,7 +18,9 @@
 // at least `min_entry_ratio` (0.2) of the larger. The
 // larger regions win, up to `max_tools`.
 // Per tool: the tip is the end away from the rim (mean of the region's pixels within
-// 3 % of the length of that extreme); axis_deg points from the tip to the rim end;
+// 3 % of the length of that extreme); axis_deg points from the tip to the rim end, or
+// (`tip_axis`) along the principal axis of the half of the region nearer the tip where
+// that line runs through more of the region (a band along the rim joined to the shaft);
 // width = area / length; the head (joint of shaft and jaws) is `head_widths` widths
 // from the tip along the axis. Tracks (fig. 4.22/4.27/4.28): a constant-velocity
 // Kalman filter per tool on the tip and the axis angle predicts each tool; regions go
@@ -36,7 +38,12 @@
 // `bar_min_frames` (3) frames in a row, is a tool of its own (width: the bar's); where
 // one is added, the candidates with the longest support (a region: its length; a part
 // of a shared region: always) are the tools, not the largest (docs/tracking.md, "Bars
-// from the rim"). Results in the full frame's coordinates. Owns the model.
+// from the rim"). Across a band (`bridge_widths`, 2): an elongated solid region off the
+// rim whose axis, beyond one end, crosses at most that many widths below even odds and
+// then runs on to the rim over at least two widths of points, 70 % of them tool-coloured,
+// is a tool from its other end to the rim (a marker ring or a crossing instrument cut the
+// shaft), in place of a region whose tip lies on that line. Results in the full frame's
+// coordinates. Owns the model.
 // configure() sizes every buffer; track() then allocates nothing (its image operations
 // are MaskOps and BlockMean, OpenCV's bytes without OpenCV's per-call buffers), except
 // that a frame width that is not an integer multiple of the analysis width (up to 15)
@@ -69,6 +76,8 @@ struct LikelihoodToolTrackerParams {
     bool rim_bars = true;                  // RimBarSearch (docs/tracking.md, "Bars from the rim")
     double bar_min_length_fraction = 0.3;  // of the width: a bar that is a tool on its own
     int bar_min_frames = 3;                // ... once found in this many frames in a row
+    double bridge_widths = 2.0;            // a band across a shaft: at most this many widths
+    bool tip_axis = true;                  // the axis near the tip where it fits the region better
 };
 
 class LikelihoodToolTracker final : public ToolTracker {
