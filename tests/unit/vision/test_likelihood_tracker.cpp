@@ -138,14 +138,15 @@ cv::Mat scope_frame(const std::vector<Shaft>& shafts, std::vector<std::uint8_t>*
     return img;
 }
 
-LikelihoodToolTracker make_tracker(const std::vector<Shaft>& training) {
+LikelihoodToolTracker make_tracker(const std::vector<Shaft>& training,
+                                   LikelihoodToolTrackerParams params = {}) {
     std::vector<std::uint8_t> labels;
     cv::Mat img = scope_frame(training, &labels);
     ToolLikelihood m;
     m.add(view(img), labels.data());
     std::string error;
     EXPECT_TRUE(m.finish(error)) << error;
-    return LikelihoodToolTracker(m);
+    return LikelihoodToolTracker(m, params);
 }
 
 double angle_diff(double a, double b) {
@@ -595,16 +596,8 @@ TEST(LikelihoodToolTracker, ADarkShaftIsReportedWithinEightFramesFromAnySide) {
     }
 }
 
-// The trained grey-against-red model of make_tracker, with other parameters.
-LikelihoodToolTracker make_tracker_with(LikelihoodToolTrackerParams params) {
-    std::vector<std::uint8_t> labels;
-    cv::Mat img = scope_frame({{{300, 250}, 200, 24}}, &labels);
-    ToolLikelihood m;
-    m.add(view(img), labels.data());
-    std::string error;
-    EXPECT_TRUE(m.finish(error)) << error;
-    return LikelihoodToolTracker(m, params);
-}
+// The training shaft of the tests above.
+const Shaft kTraining{{300, 250}, 200, 24};
 
 // One frame through a fresh tracker: the tools found.
 std::vector<ToolEstimate> track_once(LikelihoodToolTracker& tracker, cv::Mat& img) {
@@ -626,7 +619,8 @@ TEST(LikelihoodToolTracker, TheAxisNearTheTipIsTheShaftsWhereABandAlongTheRimJoi
     cv::ellipse(img, {320, 240}, {217, 217}, 0, 220, 276, cv::Scalar(128, 126, 124), 14);
     LikelihoodToolTrackerParams whole;
     whole.tip_axis = false;
-    LikelihoodToolTracker old_rule = make_tracker_with(whole), tracker = make_tracker_with({});
+    LikelihoodToolTracker old_rule = make_tracker({kTraining}, whole),
+                          tracker = make_tracker({kTraining});
     const std::vector<ToolEstimate> skewed = track_once(old_rule, img),
                                     found = track_once(tracker, img);
     ASSERT_EQ(skewed.size(), 1u);
@@ -646,7 +640,8 @@ TEST(LikelihoodToolTracker, AShaftCutByABandOfUpToTwoWidthsIsOneToolToItsTip) {
         cv::rectangle(img, cv::Rect(300, 270 - band, 41, band), cv::Scalar(60, 50, 190), -1);
         LikelihoodToolTrackerParams off;
         off.bridge_widths = 0;
-        LikelihoodToolTracker unbridged = make_tracker_with(off), tracker = make_tracker_with({});
+        LikelihoodToolTracker unbridged = make_tracker({kTraining}, off),
+                              tracker = make_tracker({kTraining});
         const std::vector<ToolEstimate> cut = track_once(unbridged, img),
                                         found = track_once(tracker, img);
         // Without the rule: the part from the rim, ending at the band.
