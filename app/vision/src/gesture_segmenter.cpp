@@ -238,11 +238,14 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         const bool two = std::sqrt(d2(pa, pb)) > 6.0 * std::max(2.0f, radius);
         double ax = 0, ay = 0, bx2 = 0, by2 = 0;
         int na = 0, nb = 0;
+        std::uint32_t ra_fixed = 0, rb_fixed = 0;  // each entry's shaft radius
         for (const auto& e : w.entries) {
+            const std::uint32_t d =
+                w.dist[static_cast<std::size_t>(e.y - dy0) * (dx1 - dx0) + (e.x - dx0)];
             if (two && d2(e, pb) < d2(e, pa))
-                bx2 += e.x, by2 += e.y, ++nb;
+                bx2 += e.x, by2 += e.y, ++nb, rb_fixed = std::max(rb_fixed, d);
             else
-                ax += e.x, ay += e.y, ++na;
+                ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
         }
         ax /= na, ay /= na;
         if (nb > 0) bx2 /= nb, by2 /= nb;
@@ -292,6 +295,13 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         }
         GestureBlob& b = out[found];
         b.arms = count_arms(win, tx - x0, ty - y0, R - 1.5);  // before the tracer marks it
+        // Two tools, one much thicker near the scope: the window of the thinner shaft.
+        b.thin_arms = 0;
+        if (nb > 0) {
+            const double r_thin =
+                std::max(1.0, static_cast<double>(std::min(ra_fixed, rb_fixed)) * (1.0 / 65536.0));
+            b.thin_arms = count_arms(win, tx - x0, ty - y0, params_.window_radii * r_thin - 1.5);
+        }
         // The profile's axis: from the tip to the entry it was reached from.
         GestureFeatures profile;
         if (params_.profile) {

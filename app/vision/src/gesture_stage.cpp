@@ -68,8 +68,14 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         // near the scope widened it past the picture (docs/gestures.md, "No arm"). Two
         // tools whose jaws cross leave the window as two shafts; one arm is a tool
         // resting against the other, not a two-tool gesture ("One arm").
-        if (results[i].confidence < params_.min_confidence || blobs_[i].arms == 0 ||
-            (two_tool_gesture(results[i].label) && blobs_[i].arms < 2))
+        // A 10 mm grasper near the scope widens the window past a crossing with a 5 mm
+        // tool; the thinner shaft's window tells jaws crossing from the tools' bodies
+        // (docs/gestures.md, "The thinner shaft's arms").
+        int arms = blobs_[i].arms;
+        if (arms == 0 && blobs_[i].entries == 2 && params_.thin_window_arms)
+            arms = blobs_[i].thin_arms;
+        if (results[i].confidence < params_.min_confidence || arms == 0 ||
+            (two_tool_gesture(results[i].label) && arms < 2))
             results[i].label = -1;
     }
     // One region with a gesture: it is the frame's; two: two single-tool calls. A region
@@ -111,6 +117,7 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         ctx.trace.field("confidence", results[i].confidence)
             .field("entries", blobs_[i].entries)
             .field("arms", blobs_[i].arms)
+            .field("thin_arms", blobs_[i].thin_arms)
             .begin_array("tip_px")
             .value(blobs_[i].tip.x)
             .value(blobs_[i].tip.y)

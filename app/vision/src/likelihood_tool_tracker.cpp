@@ -860,7 +860,14 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
             }
             if (!coast) {
                 t.x.update(tip.x, kTipNoise), t.y.update(tip.y, kTipNoise);
-                if (c.track < 0) t.angle.update(za, kAngleNoise);  // else the prediction itself
+                // In a shared region the axis is the prediction itself, which nothing
+                // measured corrects: at the rate it had on entering, it turned on about
+                // its entry, through the tissue, while both tools rested. So it keeps no
+                // rate there (docs/tracking.md, "A shared tool does not turn").
+                if (c.track < 0)
+                    t.angle.update(za, kAngleNoise);
+                else
+                    t.angle.damp_velocity(0.0);
             }
         }
         t.missed = 0;

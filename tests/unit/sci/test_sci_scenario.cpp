@@ -307,6 +307,29 @@ TEST(SciScenario, ACrossBesideAGlintPatchReadAsScissorsOpensTheQuadrantMenu) {
     fs::remove_all(dir);
 }
 
+// The SCI's cross trial 84: a 10 mm grasper crosses a 5 mm scissors near the scope. The
+// tip window, 8 radii of the grasper's shaft, holds the whole crossing, so no arm leaves
+// it and the "No arm" rule took no gesture (no menu); in the window of the thinner shaft
+// both shafts leave, and the cross opens the quadrant menu and turns the SCI off again
+// (docs/gestures.md, "The thinner shaft's arms").
+TEST(SciScenario, ACrossWithATenMillimetreGrasperNearTheScopeOpensTheQuadrantMenu) {
+    const fs::path dir = temp_dir("cross_ten_mm");
+    const std::string failed = replay_with_gestures(dir, "cross_ten_mm.yaml", "ring");
+    ASSERT_TRUE(failed.empty()) << failed;
+    expect_quadrant_then_off(dir, {43, 45}, {113, 115});
+    // The case is there: the crossing's own window has no arm, the thinner one two.
+    int widened = 0;
+    std::ifstream trace(dir / "trace.jsonl");
+    for (std::string line; std::getline(trace, line);) {
+        const nlohmann::json frame = nlohmann::json::parse(line);
+        for (const auto& t : frame.at("gesture").at("tools"))
+            widened += t.at("entries") == 2 && t.at("arms") == 0 && t.at("thin_arms") >= 2 &&
+                       t.at("label") == "cross";
+    }
+    EXPECT_GE(widened, 80);
+    fs::remove_all(dir);
+}
+
 TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
     const fs::path dir = temp_dir("board");
     std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";

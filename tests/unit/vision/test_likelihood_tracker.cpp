@@ -657,5 +657,38 @@ TEST(LikelihoodToolTracker, AShaftCutByABandOfUpToTwoWidthsIsOneToolToItsTip) {
     }
 }
 
+// A tool sharing a region keeps its predicted axis there (the shared region's shape says
+// little of it), which no measurement corrects: a turning rate it had on entering used to
+// carry on after it stopped, its tip sweeping round its incision through the tissue
+// while both tools rested (the SCI's cross trials: no cross held still). A turns about its
+// incision 1 degree a frame until its tip meets B's shaft, then rests with B for 40
+// frames: its axis stays within 6 degrees, its tip within a width (the rate it had is
+// dropped in the shared region).
+TEST(LikelihoodToolTracker, ATurnStopsWhenTheToolStopsInASharedRegion) {
+    LikelihoodToolTracker tracker = make_tracker({kTraining});
+    const Shaft b{{330, 170}, 90, 16};
+    const Point2 incision{47, 276};
+    double worst_deg = 0, worst_px = 0;
+    for (int t = 0; t < 56; ++t) {
+        // The tip 300 px from the incision at -36 + t degrees up to -20 (on B's tip).
+        const double phi = -36.0 + std::min(t, 16), r = phi * M_PI / 180;
+        const Shaft a{
+            {incision.x + 300 * std::cos(r), incision.y + 300 * std::sin(r)}, phi + 180, 24};
+        cv::Mat img = scope_frame({a, b});
+        if (t == 0) tracker.configure(view(img).format);
+        std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
+        const std::size_t n = tracker.track(view(img), out);
+        ASSERT_EQ(n, 2u) << "frame " << t;
+        const ToolEstimate& e =
+            angle_diff(out[0].axis_deg, b.dir_deg) > angle_diff(out[1].axis_deg, b.dir_deg)
+                ? out[0]
+                : out[1];
+        if (t < 16) continue;
+        worst_deg = std::max(worst_deg, angle_diff(e.axis_deg, a.dir_deg));
+        worst_px = std::max(worst_px, std::hypot(e.tip.x - a.tip.x, e.tip.y - a.tip.y));
+    }
+    EXPECT_LT(worst_deg, 6.0);
+    EXPECT_LT(worst_px, 24.0);
+}
 }  // namespace
 }  // namespace endotower::vision

@@ -22,7 +22,9 @@
 //     within `window_radii` (8) x r of the tip (jaws and a little shaft), on which
 //     the features are measured (GestureFeatures: the book's six, the extras, the holes,
 //     and, when `profile` is set, the profile across the axis from the tip to its
-//     entry, in units of r; else those stay 0).
+//     entry, in units of r; else those stay 0); the arms: the region's parts that
+//     cross the window's edge, and for a region entering twice also those crossing
+//     the circle of `window_radii` x the thinner entry's radius (`thin_arms`).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
 // allocated in configure(); own code (BlockMean, MaskOps, ContourTracer) gives the bytes
@@ -61,6 +63,7 @@ struct GestureBlob {
     double radius_px = 0;  // shaft radius, input frame pixels
     int entries = 1;       // rim entries: 2 = two tools in one region
     int arms = 0;          // the region's runs across the tip window's edge
+    int thin_arms = 0;     // entering twice: the runs across the thinner shaft's window
     GestureFeatures features;
 };
 

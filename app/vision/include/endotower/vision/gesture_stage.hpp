@@ -12,6 +12,9 @@
 // shape is not the jaws'; two tools at rest against each other read as a cross), and a
 // two-tool gesture (cross, triangle, double triangle) in a window only one arm leaves
 // (crossing jaws leave it as two shafts; one is a tool resting against the other).
+// Where a region enters twice and no arm leaves its window, the arms are counted on the
+// window of the thinner entry's shaft instead (`thin_window_arms`, default on: a 10 mm
+// grasper crossing a 5 mm tool near the scope; GestureBlob::thin_arms).
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
 // the hold began; moving starts a new hold. Another label (or none) for at most
@@ -24,7 +27,8 @@
 // virtual clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
-//               "tools": [{"label", "confidence", "entries", "arms", "tip_px": [x, y]}]}
+//               "tools": [{"label", "confidence", "entries", "arms", "thin_arms",
+//                          "tip_px": [x, y]}]}
 // Overlay: a square at each classified tip, filled when the gesture has fired.
 // Borrows the segmenter and the classifier. current(): this frame's gesture for the
 // stages after it in the chain (the SCI).
@@ -75,6 +79,7 @@ struct GestureStageParams {
     GestureHoldParams hold;
     double min_confidence = 0.5;
     bool crossing_is_the_frames = true;  // a two-tool gesture outranks other regions
+    bool thin_window_arms = true;        // no arm: count them in the thinner shaft's window
 };
 
 // One frame's gesture: label -1 = none; tip where the gesture's region is (px).

@@ -26,8 +26,9 @@
 // Kalman filter per tool on the tip and the axis angle predicts each tool; regions go
 // to tracks by the least summed distance of tip (in widths) and axis (in 20 degrees).
 // A region shared by two tracked tools is split by their predicted shafts (entry to
-// predicted tip, nearest segment), keeps the predicted axis, and does not look for a
-// tool's end under the other's shaft or beyond its own width from its axis; such a
+// predicted tip, nearest segment), keeps the predicted axis (and no turning rate: it
+// is not measured there), and does not look for a tool's end under the other's shaft
+// or beyond its own width from its axis; such a
 // measurement that jumps more than the gate (4 sigma, one to two widths) or turns by
 // more than 20 degrees is the other tool's part, and the track reports its prediction
 // at half confidence, up to `max_coast_frames`. A tool missing for `keep_frames`
