@@ -253,6 +253,15 @@ TEST(SciScenario, AStraightStrokeDeniesAfterTwoSeconds) {
     fs::remove_all(dir);
 }
 
+// Every frame's gesture regions ("gesture.tools") of dir/trace.jsonl.
+std::vector<nlohmann::json> gesture_regions(const fs::path& dir) {
+    std::vector<nlohmann::json> frames;
+    std::ifstream trace(dir / "trace.jsonl");
+    for (std::string line; std::getline(trace, line);)
+        frames.push_back(nlohmann::json::parse(line).at("gesture").at("tools"));
+    return frames;
+}
+
 // A 120-frame cross scenario's only two events: the quadrant menu opening on a frame in
 // `open` (first, last), then the SCI turning off on a frame in `off`.
 void expect_quadrant_then_off(const fs::path& dir, std::pair<int, int> open,
@@ -292,9 +301,7 @@ TEST(SciScenario, ACrossBesideAGlintPatchReadAsScissorsOpensTheQuadrantMenu) {
     expect_quadrant_then_off(dir, {43, 45}, {113, 115});
     // The case is there: frames with the cross and a second region read as scissors.
     int beside = 0;
-    std::ifstream trace(dir / "trace.jsonl");
-    for (std::string line; std::getline(trace, line);) {
-        const nlohmann::json tools = nlohmann::json::parse(line)["gesture"]["tools"];
+    for (const nlohmann::json& tools : gesture_regions(dir)) {
         bool cross = false, scissors = false;
         for (const auto& t : tools) {
             const std::string label = t["label"].is_string() ? t["label"].get<std::string>() : "";
@@ -319,13 +326,10 @@ TEST(SciScenario, ACrossWithATenMillimetreGrasperNearTheScopeOpensTheQuadrantMen
     expect_quadrant_then_off(dir, {43, 45}, {113, 115});
     // The case is there: the crossing's own window has no arm, the thinner one two.
     int widened = 0;
-    std::ifstream trace(dir / "trace.jsonl");
-    for (std::string line; std::getline(trace, line);) {
-        const nlohmann::json frame = nlohmann::json::parse(line);
-        for (const auto& t : frame.at("gesture").at("tools"))
+    for (const nlohmann::json& tools : gesture_regions(dir))
+        for (const auto& t : tools)
             widened += t.at("entries") == 2 && t.at("arms") == 0 && t.at("thin_arms") >= 2 &&
                        t.at("label") == "cross";
-    }
     EXPECT_GE(widened, 80);
     fs::remove_all(dir);
 }
