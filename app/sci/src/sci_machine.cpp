@@ -1,5 +1,6 @@
 #include "endotower/sci/sci_machine.hpp"
 
+#include <bit>
 #include <cmath>
 
 namespace endotower::sci {
@@ -8,12 +9,6 @@ namespace {
 
 hal::Nanos ms_to_ns(double ms) {
     return static_cast<hal::Nanos>(std::llround(ms * 1e6));
-}
-
-double wrap_deg(double a) {
-    while (a > 180) a -= 360;
-    while (a <= -180) a += 360;
-    return a;
 }
 
 }  // namespace
@@ -152,16 +147,19 @@ void SciMachine::point(const SciFrame& f) {
     }
     // Open grasper held (the gesture fired): select, then wait for the loop (fig. 3.32).
     // The item is the one under the tip, or the one the tip left while the grasper was
-    // held still: the hold began on it.
+    // held still: the hold began on it. Opening the jaws moves the tracked tip, and the
+    // hold dates from the first frame read as an open grasper, up to the gesture hold's
+    // dropout tolerance later: an item left within `select_grace_ms` before the hold
+    // counts too.
     const bool left_in_hold =
-        left_item_ >= 0 && !rearm_ && f.t_ns - left_at_ <= ms_to_ns(f.gesture_held_ms);
+        left_item_ >= 0 && !rearm_ &&
+        f.t_ns - left_at_ <= ms_to_ns(f.gesture_held_ms + params_.select_grace_ms);
     const int selected = highlighted_ >= 0 ? highlighted_ : left_in_hold ? left_item_ : -1;
     if (selected >= 0 && f.gesture == SciGesture::kOpenGrasper && f.gesture_fired) {
         highlighted_ = confirm_item_ = selected;
         left_item_ = -1;
         confirm_start_ = f.t_ns;
-        loop_turn_ = 0;
-        loop_have_heading_ = false;
+        loop_sectors_ = 0;
         loop_x_ = f.tool_count > 0 ? f.tools[0].x : 0;
         loop_y_ = f.tool_count > 0 ? f.tools[0].y : 0;
         tip_count_ = tip_next_ = 0;  // the loop's path starts here
@@ -197,13 +195,18 @@ void SciMachine::track_loop(const SciFrame& f) {
     }
     const double x = sx / n, y = sy / n;
     const double dx = x - loop_x_, dy = y - loop_y_;
-    // Steps of the mean shorter than 2 % of the height are jitter, not motion.
-    if (std::hypot(dx, dy) < 0.02 * height_) return;
+    // Steps of the mean shorter than `loop_step_fraction` of the height are jitter.
+    if (std::hypot(dx, dy) < params_.loop_step_fraction * height_) return;
+    // A loop travels every direction; a stroke and back two opposite ones, and jitter
+    // that passes the floor a few more. The directions travelled, in 45-degree sectors.
     const double heading = std::atan2(dy, dx) * 180.0 / 3.14159265358979323846;
-    if (loop_have_heading_) loop_turn_ += wrap_deg(heading - loop_heading_);
-    loop_heading_ = heading;
-    loop_have_heading_ = true;
+    const int sector = static_cast<int>((heading < 0 ? heading + 360.0 : heading) / 45.0) % 8;
+    loop_sectors_ = static_cast<std::uint8_t>(loop_sectors_ | (1u << sector));
     loop_x_ = x, loop_y_ = y;
+}
+
+int SciMachine::loop_sectors() const {
+    return std::popcount(static_cast<unsigned>(loop_sectors_));
 }
 
 void SciMachine::functions(const SciFrame& f) {
@@ -359,7 +362,7 @@ void SciMachine::step(const SciFrame& f) {
             break;
         case SciState::kConfirm:
             track_loop(f);
-            if (std::abs(loop_turn_) >= params_.loop_deg) {
+            if (loop_sectors() >= params_.loop_sectors) {
                 const int item = confirm_item_;
                 go(SciState::kMenu);
                 execute(menu().items[static_cast<std::size_t>(item)]);

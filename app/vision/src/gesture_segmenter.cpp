@@ -239,13 +239,38 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         double ax = 0, ay = 0, bx2 = 0, by2 = 0;
         int na = 0, nb = 0;
         std::uint32_t ra_fixed = 0, rb_fixed = 0;  // each entry's shaft radius
+        // With two: how near each comes to the rim, its farthest pixel from the field
+        // of view's centre (squared) and its nearest to the picture's edge.
+        double qa = 0, qb = 0, edge_a = W + H, edge_b = W + H;
         for (const auto& e : w.entries) {
             const std::uint32_t d =
                 w.dist[static_cast<std::size_t>(e.y - dy0) * (dx1 - dx0) + (e.x - dx0)];
-            if (two && d2(e, pb) < d2(e, pa))
-                bx2 += e.x, by2 += e.y, ++nb, rb_fixed = std::max(rb_fixed, d);
-            else
+            if (!two) {
                 ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
+                continue;
+            }
+            const double q = (e.x - fcx) * (e.x - fcx) + (e.y - fcy) * (e.y - fcy),
+                         edge = std::min({e.x + 1.0, e.y + 1.0, double(W - e.x), double(H - e.y)});
+            if (d2(e, pb) < d2(e, pa)) {
+                bx2 += e.x, by2 += e.y, ++nb, rb_fixed = std::max(rb_fixed, d);
+                qb = std::max(qb, q), edge_b = std::min(edge_b, edge);
+            } else {
+                ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
+                qa = std::max(qa, q), edge_a = std::min(edge_a, edge);
+            }
+        }
+        // A shaft crosses the rim; a jaw's end that only comes near it (an open jaw
+        // reaching towards the rim) is no entry: where one of the two does not reach
+        // within `entry_rim_fraction` x width of the rim, the region enters once.
+        if (nb > 0 && params_.entry_rim_fraction > 0) {
+            const double crossing = params_.entry_rim_fraction * W;
+            const bool a_in = std::min(fr - std::sqrt(qa), edge_a) <= crossing,
+                       b_in = std::min(fr - std::sqrt(qb), edge_b) <= crossing;
+            if (a_in != b_in) {
+                if (b_in) ax = bx2, ay = by2, na = nb, ra_fixed = rb_fixed;
+                nb = 0, bx2 = by2 = 0;
+                radius = static_cast<float>(ra_fixed) * (1.0f / 65536.0f);
+            }
         }
         ax /= na, ay /= na;
         if (nb > 0) bx2 /= nb, by2 /= nb;

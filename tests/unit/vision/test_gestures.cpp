@@ -750,3 +750,49 @@ TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
     none.configure(f.format);
     EXPECT_EQ(none.segment(f, blobs), 0u);
 }
+
+TEST(GestureSegmenter, AnOpenJawsEndNearTheRimIsNoSecondEntry) {
+    // A dark shaft from the right border opens into two jaws; the upper jaw reaches
+    // towards the left border and stops 16 px short of it: inside the band in which a
+    // region counts as reaching the rim (0.06 x 640 = 38 px), but it does not cross it
+    // (an open 10 mm grasper near the scope, docs/gestures.md "An open jaw's end").
+    const int W = 640, H = 480;
+    std::vector<std::uint8_t> img(static_cast<std::size_t>(W) * H * 3);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            std::uint8_t* p = &img[(static_cast<std::size_t>(y) * W + x) * 3];
+            p[0] = 200, p[1] = 210, p[2] = 240;
+            const bool shaft = x >= 420 && y >= 230 && y < 250;
+            const bool upper = x >= 16 && x < 426 && y >= 222 && y < 230;
+            const bool lower = x >= 300 && x < 426 && y >= 250 && y < 258;
+            if (shaft || upper || lower) p[0] = p[1] = p[2] = 85;
+        }
+    hal::Frame f;
+    f.format = {W, H, W * 3, hal::PixelFormat::kBgr24};
+    f.data = img.data();
+    auto segment = [&](double entry_rim_fraction) {
+        GestureSegmenterParams params;
+        params.method = GestureSegmentation::kMorphology;
+        params.entry_rim_fraction = entry_rim_fraction;
+        GestureSegmenter seg(nullptr, params);
+        seg.configure(f.format);
+        std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs{};
+        EXPECT_EQ(seg.segment(f, blobs), 1u);
+        return blobs[0];
+    };
+    // The jaw's end is no entry: the region enters once, at the right, and its tip is
+    // the jaw's end (the mean of the pixels within 3 % of the farthest reach, about 400
+    // px: x 16-28), with the shaft's radius (10 px).
+    const GestureBlob one = segment(0.0125);
+    EXPECT_EQ(one.entries, 1);
+    EXPECT_GE(one.tip.x, 16.0);
+    EXPECT_LE(one.tip.x, 28.0);
+    EXPECT_NEAR(one.tip.y, 226.0, 4.0);
+    EXPECT_NEAR(one.radius_px, 10.0, 1.5);
+    // Without the rule the jaw's end was a second entry and the tip the point farthest
+    // from both: the middle of the upper jaw.
+    const GestureBlob two = segment(0.0);
+    EXPECT_EQ(two.entries, 2);
+    EXPECT_GT(two.tip.x, 150.0);
+    EXPECT_LT(two.tip.x, 330.0);
+}

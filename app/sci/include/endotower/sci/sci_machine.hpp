@@ -7,9 +7,9 @@
 // bottom of the image, fig. 3.31), menu (pointing, nothing highlighted), highlight
 // (the item under the tip or chosen by the wheel; the tip's item clicks after
 // `dwell_ms`), confirm (an item selected with the open grasper, the one under the tip
-// or the one the tip left during the grasper's hold, waits `confirm_ms` for a loop of
-// the tip's 160 ms mean: a loop confirms, anything else denies, fig. 3.32/3.33),
-// grabbed (the image box follows the tool, eq. 4.33).
+// or the one the tip left during the grasper's hold or `select_grace_ms` before it,
+// waits `confirm_ms` for a loop of the tip's 160 ms mean: a loop confirms, anything
+// else denies, fig. 3.32/3.33), grabbed (the image box follows the tool, eq. 4.33).
 // Inputs: button press = activate / click the highlighted item / place the box;
 // long press = deactivate; wheel = move the highlight (images in the viewer); a cross
 // held `cross_hold_ms` opens the quadrant menu when inactive and deactivates otherwise.
@@ -19,8 +19,9 @@
 // command; docs/sci.md "False activations").
 // event() names what happened this frame (docs/sci.md lists them), or is empty.
 // Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
-// hold 1000 ms, confirm window 2000 ms, loop 270 deg of turning, activation area the
-// bottom 20 % x middle 40 % of the frame. No allocation after configure().
+// hold 1000 ms, confirm window 2000 ms, select grace 200 ms, loop 6 of 8 directions,
+// activation area the bottom 20 % x middle 40 % of the frame. No allocation after
+// configure().
 #pragma once
 
 #include <array>
@@ -66,10 +67,18 @@ struct SciFrame {
 struct SciParams {
     SciLayout layout = SciLayout::kThreeLevel;
     double dwell_ms = 2000, activation_hold_ms = 3000, cross_hold_ms = 1000, confirm_ms = 2000;
-    // Turning of the tip's 160 ms mean that confirms: one turn read in steps of at least
-    // 2 % of the height measures about 280-345 degrees (360 less the first step's angle,
-    // large on a small loop); a stroke back is one reversal, 180.
-    double loop_deg = 270;
+    // The loop, read on the tip's 160 ms mean in steps of at least `loop_step_fraction`
+    // of the height: it confirms once the steps have gone in `loop_sectors` of the eight
+    // 45-degree directions (one turn goes in all eight, a small or quick one in 6-8; a
+    // stroke and back in two, with the tracked tip's jitter 3-5; docs/sci.md, "Select
+    // and loop").
+    int loop_sectors = 6;
+    double loop_step_fraction = 0.015;
+    // An item the tip left this long before the open grasper's hold began is still the
+    // one selected: the hold's start lags the jaws' opening by up to the gesture hold's
+    // dropout tolerance (GestureHoldParams::dropout_ms, 200), while opening them moves
+    // the tracked tip.
+    double select_grace_ms = 200;
     double still_fraction = 0.03;  // of the width: a tool's tip "still" during a cross hold
     double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
     std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)
@@ -119,6 +128,7 @@ private:
     void track_loop(const SciFrame& f);
     void remember_tip(const SciFrame& f);
     bool cross_held(const SciFrame& f);
+    int loop_sectors() const;
 
     SciParams params_;
     SciMenuTable menus_{};
@@ -145,11 +155,11 @@ private:
     bool wheel_highlight_ = false;  // the highlight came from the wheel, not the tip
     hal::Nanos activation_start_ = 0;
     double last_held_ms_ = 0;
-    // confirm: the window and the tip's turning since it opened
+    // confirm: the window and the directions the tip went since it opened
     hal::Nanos confirm_start_ = 0;
     int confirm_item_ = -1;
-    double loop_x_ = 0, loop_y_ = 0, loop_heading_ = 0, loop_turn_ = 0;
-    bool loop_have_heading_ = false;
+    double loop_x_ = 0, loop_y_ = 0;
+    std::uint8_t loop_sectors_ = 0;  // bit k: a step went in direction k x 45 degrees
     // The cursor's recent tips: the loop is followed on their mean over kTipSmoothingNs.
     struct TipSample {
         hal::Nanos t = 0;

@@ -17,7 +17,9 @@
 //     from outside the picture) and whose length (principal axis, second moments) is
 //     at least `min_elongation` (2.5) x their width; the largest `kMaxBlobs` (2);
 //  3. per region, the tip: the pixel farthest from where it enters (from both entries
-//     when two tools cross and meet the rim twice); the shaft radius r: the largest
+//     when two tools cross and meet the rim twice; of two parts near the rim, one that
+//     does not come within `entry_rim_fraction` (0.0125) x width of it while the other
+//     does is no entry: an open jaw's end); the shaft radius r: the largest
 //     distance-transform value near the entry; the tip window: the region's pixels
 //     within `window_radii` (8) x r of the tip (jaws and a little shaft), on which
 //     the features are measured (GestureFeatures: the book's six, the extras, the holes,
@@ -55,6 +57,7 @@ struct GestureSegmenterParams {
     double border_touch_fraction = 0.06;
     double min_elongation = 2.5;
     double window_radii = 8.0;
+    double entry_rim_fraction = 0.0125;  // an entry reaches this near the rim (x width)
     bool profile = false;  // measure the profile features (a kProfile model reads them)
 };
 
