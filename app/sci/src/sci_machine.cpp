@@ -205,7 +205,7 @@ void SciMachine::track_loop(const SciFrame& f) {
     loop_x_ = x, loop_y_ = y;
 }
 
-int SciMachine::loop_sectors() const {
+int SciMachine::sectors_travelled() const {
     return std::popcount(static_cast<unsigned>(loop_sectors_));
 }
 
@@ -362,7 +362,7 @@ void SciMachine::step(const SciFrame& f) {
             break;
         case SciState::kConfirm:
             track_loop(f);
-            if (loop_sectors() >= params_.loop_sectors) {
+            if (sectors_travelled() >= params_.loop_sectors) {
                 const int item = confirm_item_;
                 go(SciState::kMenu);
                 execute(menu().items[static_cast<std::size_t>(item)]);

@@ -719,22 +719,40 @@ TEST(GestureClassifier, RetrainingTheTwoToolNetworkKeepsTheSingleToolNetwork) {
     EXPECT_NE(error.find("no two-tool network"), std::string::npos) << error;
 }
 
-TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
-    // A pinkish lit field with a dark shaft from the right border ending in two jaws.
-    const int W = 640, H = 480;
-    std::vector<std::uint8_t> img(static_cast<std::size_t>(W) * H * 3);
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            std::uint8_t* p = &img[(static_cast<std::size_t>(y) * W + x) * 3];
+namespace {
+
+// A pinkish lit 640x480 field, BGR, with dark steel (85, inside the lit field) where
+// `steel(x, y)` holds.
+template <typename Steel>
+std::vector<std::uint8_t> lit_field_with(Steel steel) {
+    std::vector<std::uint8_t> img(static_cast<std::size_t>(640) * 480 * 3);
+    for (int y = 0; y < 480; ++y)
+        for (int x = 0; x < 640; ++x) {
+            std::uint8_t* p = &img[(static_cast<std::size_t>(y) * 640 + x) * 3];
             p[0] = 200, p[1] = 210, p[2] = 240;
-            const bool shaft = x >= 300 && y >= 230 && y < 250;
-            const bool jaw1 = x >= 240 && x < 306 && y >= 222 && y < 230;
-            const bool jaw2 = x >= 240 && x < 306 && y >= 250 && y < 258;
-            if (shaft || jaw1 || jaw2) p[0] = p[1] = p[2] = 85;  // dark steel, inside the lit field
+            if (steel(x, y)) p[0] = p[1] = p[2] = 85;
         }
+    return img;
+}
+
+hal::Frame frame_of(std::vector<std::uint8_t>& img) {
     hal::Frame f;
-    f.format = {W, H, W * 3, hal::PixelFormat::kBgr24};
+    f.format = {640, 480, 640 * 3, hal::PixelFormat::kBgr24};
     f.data = img.data();
+    return f;
+}
+
+}  // namespace
+
+TEST(GestureSegmenter, BookMorphologyFindsADarkToolEnteringFromTheBorder) {
+    // A dark shaft from the right border ending in two jaws.
+    std::vector<std::uint8_t> img = lit_field_with([](int x, int y) {
+        const bool shaft = x >= 300 && y >= 230 && y < 250;
+        const bool jaw1 = x >= 240 && x < 306 && y >= 222 && y < 230;
+        const bool jaw2 = x >= 240 && x < 306 && y >= 250 && y < 258;
+        return shaft || jaw1 || jaw2;
+    });
+    const hal::Frame f = frame_of(img);
     GestureSegmenterParams params;
     params.method = GestureSegmentation::kMorphology;
     GestureSegmenter seg(nullptr, params);
@@ -755,21 +773,15 @@ TEST(GestureSegmenter, AnOpenJawsEndNearTheRimIsNoSecondEntry) {
     // A dark shaft from the right border opens into two jaws; the upper jaw reaches
     // towards the left border and stops 16 px short of it: inside the band in which a
     // region counts as reaching the rim (0.06 x 640 = 38 px), but it does not cross it
-    // (an open 10 mm grasper near the scope, docs/gestures.md "An open jaw's end").
-    const int W = 640, H = 480;
-    std::vector<std::uint8_t> img(static_cast<std::size_t>(W) * H * 3);
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            std::uint8_t* p = &img[(static_cast<std::size_t>(y) * W + x) * 3];
-            p[0] = 200, p[1] = 210, p[2] = 240;
-            const bool shaft = x >= 420 && y >= 230 && y < 250;
-            const bool upper = x >= 16 && x < 426 && y >= 222 && y < 230;
-            const bool lower = x >= 300 && x < 426 && y >= 250 && y < 258;
-            if (shaft || upper || lower) p[0] = p[1] = p[2] = 85;
-        }
-    hal::Frame f;
-    f.format = {W, H, W * 3, hal::PixelFormat::kBgr24};
-    f.data = img.data();
+    // (an open 10 mm grasper near the scope, docs/gestures.md "An open jaw's end near
+    // the rim").
+    std::vector<std::uint8_t> img = lit_field_with([](int x, int y) {
+        const bool shaft = x >= 420 && y >= 230 && y < 250;
+        const bool upper = x >= 16 && x < 426 && y >= 222 && y < 230;
+        const bool lower = x >= 300 && x < 426 && y >= 250 && y < 258;
+        return shaft || upper || lower;
+    });
+    const hal::Frame f = frame_of(img);
     auto segment = [&](double entry_rim_fraction) {
         GestureSegmenterParams params;
         params.method = GestureSegmentation::kMorphology;

@@ -128,7 +128,7 @@ private:
     void track_loop(const SciFrame& f);
     void remember_tip(const SciFrame& f);
     bool cross_held(const SciFrame& f);
-    int loop_sectors() const;
+    int sectors_travelled() const;  // of the eight, since the select
 
     SciParams params_;
     SciMenuTable menus_{};
