@@ -229,18 +229,18 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
             stderr,
             "endotower %s: analysis.regions.mark_with_tool needs a tracker: no tip to mark with\n",
             command);
-    if (board.region_mark_with_tool) {
-        // The pointer is the most confident tool of this frame (as the SCI's cursor).
-        vision::ToolTrackingStage* tracking = &*p.tracking;
-        p.regions->enable_tool_marking({}, [tracking](vision::Point2& tip) {
-            double best = 0;
-            for (std::size_t i = 0; i < tracking->tool_count(); ++i) {
-                const vision::ToolEstimate& t = tracking->tool(i);
-                if (t.present && t.confidence > best) best = t.confidence, tip = t.tip;
-            }
-            return best > 0;
-        });
-    }
+    // The pointer is the most confident tool of this frame (as the SCI's cursor): it marks
+    // regions, and its gesture is the one the surgeon makes.
+    const vision::ToolTrackingStage* tracking = &*p.tracking;
+    const auto pointer = [tracking](vision::Point2& tip) {
+        double best = 0;
+        for (std::size_t i = 0; i < tracking->tool_count(); ++i) {
+            const vision::ToolEstimate& t = tracking->tool(i);
+            if (t.present && t.confidence > best) best = t.confidence, tip = t.tip;
+        }
+        return best > 0;
+    };
+    if (board.region_mark_with_tool) p.regions->enable_tool_marking({}, pointer);
     vision::RegionOverlay tool_overlay;
     vision::parse_region_overlay(board.region_overlay, tool_overlay, error);  // checked
     p.regions->set_tool_overlay(tool_overlay);
@@ -297,6 +297,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
     vision::GestureStageParams gesture_params;
     gesture_params.hold.hold_ms = board.gesture_hold_ms;
     p.gesture_stage.emplace(*p.gesture_segmenter, p.gesture_classifier, gesture_params);
+    if (board.tracker != "none") p.gesture_stage->set_pointer(pointer);
 
     // The calibration check first: with fov_mask it blackens the analysis frame outside
     // the field of view, so no later stage detects anything there.

@@ -1,5 +1,6 @@
 #include "endotower/sci/sci_machine.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 
@@ -9,6 +10,29 @@ namespace {
 
 hal::Nanos ms_to_ns(double ms) {
     return static_cast<hal::Nanos>(std::llround(ms * 1e6));
+}
+
+// A frame's tool tips, and whether every one of `n` tips lies within `still_px` of one
+// of the `na` anchors (a tool the tracker drops, crossed shafts merging, is no motion).
+using Tips = std::array<std::array<double, 2>, 2>;
+bool tips_near(const Tips& tips, int n, const Tips& anchor, int na, double still_px) {
+    for (int i = 0; i < n; ++i) {
+        const auto& t = tips[static_cast<std::size_t>(i)];
+        bool near = false;
+        for (int k = 0; k < na; ++k) {
+            const auto& a = anchor[static_cast<std::size_t>(k)];
+            near = near || std::hypot(t[0] - a[0], t[1] - a[1]) <= still_px;
+        }
+        if (!near) return false;
+    }
+    return true;
+}
+
+int tips_of(const SciFrame& f, Tips& tips) {
+    for (int i = 0; i < f.tool_count; ++i)
+        tips[static_cast<std::size_t>(i)] = {f.tools[static_cast<std::size_t>(i)].x,
+                                             f.tools[static_cast<std::size_t>(i)].y};
+    return f.tool_count;
 }
 
 }  // namespace
@@ -247,31 +271,39 @@ void SciMachine::functions(const SciFrame& f) {
     }
 }
 
+void SciMachine::remember_tools(const SciFrame& f) {
+    RecentTools& r = recent_[recent_next_];
+    r.t_ns = f.t_ns;
+    r.count = tips_of(f, r.tips);
+    recent_next_ = (recent_next_ + 1) % recent_.size();
+    recent_count_ = std::min(recent_count_ + 1, recent_.size());
+}
+
 bool SciMachine::cross_held(const SciFrame& f) {
     const double still_px = params_.still_fraction * width_;
     const bool formed =
         f.gesture == SciGesture::kCross && (!cross_holding_ || f.gesture_held_ms < last_held_ms_);
-    bool restart = f.gesture != SciGesture::kCross || formed;
-    // Every tool seen must be near where one was when the hold began; a tool the tracker
-    // drops meanwhile (crossed shafts merge) is no motion.
-    for (int i = 0; i < f.tool_count && !restart; ++i) {
-        const SciTool& t = f.tools[static_cast<std::size_t>(i)];
-        bool near = false;
-        for (int k = 0; k < cross_anchors_; ++k) {
-            const auto& a = cross_anchor_[static_cast<std::size_t>(k)];
-            near = near || std::hypot(t.x - a[0], t.y - a[1]) <= still_px;
-        }
-        restart = !near;
-    }
+    Tips now{};
+    const int n = tips_of(f, now);
+    // Every tool seen must be near where one was when the hold began.
+    const bool restart = f.gesture != SciGesture::kCross || formed ||
+                         !tips_near(now, n, cross_anchor_, cross_anchors_, still_px);
     if (restart) {
         cross_holding_ = f.gesture == SciGesture::kCross;
-        // A cross just formed dates from the gesture's own hold (it may date a few frames
-        // back, GestureHold); one restarted by a tool's motion from now.
-        cross_still_start_ = formed ? f.t_ns - ms_to_ns(f.gesture_held_ms) : f.t_ns;
-        cross_anchors_ = f.tool_count;
-        for (int i = 0; i < f.tool_count; ++i)
-            cross_anchor_[static_cast<std::size_t>(i)] = {f.tools[static_cast<std::size_t>(i)].x,
-                                                          f.tools[static_cast<std::size_t>(i)].y};
+        cross_anchor_ = now, cross_anchors_ = n;
+        // One restarted by a tool's motion holds from now. A cross just formed dates from
+        // the gesture's own hold (it may date a few frames back, GestureHold), but only as
+        // far back as the tools were where they are now: in those frames they may still
+        // have been coming together while another gesture was read (docs/sci.md, "A cross
+        // dated back").
+        cross_still_start_ = f.t_ns;
+        const hal::Nanos since = f.t_ns - ms_to_ns(f.gesture_held_ms);
+        for (std::size_t k = 1; formed && k < recent_count_; ++k) {
+            const RecentTools& r =
+                recent_[(recent_next_ + recent_.size() - 1 - k) % recent_.size()];
+            if (r.t_ns < since || !tips_near(r.tips, r.count, now, n, still_px)) break;
+            cross_still_start_ = r.t_ns;
+        }
     }
     return cross_holding_ && f.gesture_held_ms >= params_.cross_hold_ms &&
            f.t_ns - cross_still_start_ >= ms_to_ns(params_.cross_hold_ms);
@@ -318,6 +350,7 @@ void SciMachine::step(const SciFrame& f) {
     }
 
     // A cross held still (fig. 3.34a): the quadrant menu when inactive, else off.
+    remember_tools(f);
     if (cross_held(f) && cross_armed_) {
         cross_armed_ = false;
         if (active()) {

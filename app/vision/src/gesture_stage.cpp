@@ -55,6 +55,7 @@ GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns,
 void GestureStage::configure(const hal::FrameFormat& format) {
     segmenter_.configure(format);
     still_px_ = params_.hold.still_fraction * format.width;
+    pointer_px_ = params_.pointer_fraction * format.width;
     box_ = std::max(6, format.height / 60);
 }
 
@@ -88,6 +89,16 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         if (two_tool_gesture(results[i].label)) ++crossings, crossing = i;
     }
     if (crossings == 1 && params_.crossing_is_the_frames) gestures = 1, which = crossing;
+    // Two single-tool calls: the pointing tool's is the one the surgeon makes; the other
+    // is the idle tool's or tissue's (docs/gestures.md, "The pointing tool's gesture").
+    Point2 at;
+    if (gestures == 2 && crossings == 0 && pointer_ && pointer_(at)) {
+        std::array<double, GestureSegmenter::kMaxBlobs> d{};
+        for (std::size_t i = 0; i < n; ++i)
+            d[i] = std::hypot(blobs_[i].tip.x - at.x, blobs_[i].tip.y - at.y);
+        const std::size_t near = d[1] < d[0] ? 1 : 0;
+        if (d[near] <= pointer_px_ && d[near] < d[1 - near]) gestures = 1, which = near;
+    }
     const bool one = gestures == 1;
     const GestureHold::State s =
         hold_.update(one ? results[which].label : -1, one ? blobs_[which].tip : Point2{},

@@ -435,6 +435,36 @@ TEST(SciMachine, CrossWithASlidingToolIsNoCommand) {
     EXPECT_EQ(std::string(to_string(m.menu().id)), "quadrant");
 }
 
+// The gesture stage dates a cross from its first frame, through a few frames that showed
+// something else (GestureHold). Where the tools were still coming together in those
+// frames, the quadrant menu waits for 1.0 s of stillness from their last motion, not from
+// the date the cross got: here the second tip slides 20 px a frame (more than the 19.2 px
+// of stillness) until 200 ms, and the cross, first read at 200 ms, is dated from 0.
+TEST(SciMachine, ACrossDatedBackWaitsForTheToolsLastMotion) {
+    SciMachine m;
+    m.configure(kW, kH);
+    auto step = [&](hal::Nanos t, double x2, SciGesture g, double held_ms) {
+        SciFrame f;
+        f.t_ns = t;
+        f.tool_count = 2;
+        f.tools[0].x = 300, f.tools[0].y = 260;
+        f.tools[1].x = x2, f.tools[1].y = 300;
+        f.gesture = g;
+        f.gesture_held_ms = held_ms;
+        f.gesture_x = 320, f.gesture_y = 250;
+        m.step(f);
+        return std::string(m.event());
+    };
+    for (int k = 0; k < 5; ++k)
+        EXPECT_EQ(step(k * 40 * kMs, 200 + 20.0 * k, SciGesture::kNone, 0), "");
+    const double x2 = 200 + 20.0 * 5;  // the last motion: t = 200 ms
+    for (hal::Nanos t = 200 * kMs; t < 1200 * kMs; t += 40 * kMs)
+        ASSERT_EQ(step(t, x2, SciGesture::kCross, static_cast<double>(t) / 1e6), "")
+            << "at " << t / kMs << " ms";
+    EXPECT_EQ(step(1200 * kMs, x2, SciGesture::kCross, 1200), "quadrant");
+    EXPECT_EQ(std::string(to_string(m.menu().id)), "quadrant");
+}
+
 TEST(SciMachine, ThreeLevelNavigationReturnAndExit) {
     Driver d;
     d.press(0, 320, 240);

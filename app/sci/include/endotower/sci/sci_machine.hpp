@@ -128,6 +128,7 @@ private:
     void track_loop(const SciFrame& f);
     void remember_tip(const SciFrame& f);
     bool cross_held(const SciFrame& f);
+    void remember_tools(const SciFrame& f);
     int sectors_travelled() const;  // of the eight, since the select
 
     SciParams params_;
@@ -151,6 +152,15 @@ private:
     int cross_anchors_ = 0;
     bool cross_holding_ = false;
     hal::Nanos cross_still_start_ = 0;
+    // The tools' tips of the last frames (a ring, the newest at recent_next_ - 1): how far
+    // back a cross the gesture stage dates back found them where they are.
+    struct RecentTools {
+        hal::Nanos t_ns = 0;
+        int count = 0;
+        std::array<std::array<double, 2>, 2> tips{};
+    };
+    std::array<RecentTools, 16> recent_{};
+    std::size_t recent_next_ = 0, recent_count_ = 0;
     bool rearm_ = false;            // after a click the tip must leave the items first
     bool wheel_highlight_ = false;  // the highlight came from the wheel, not the tip
     hal::Nanos activation_start_ = 0;

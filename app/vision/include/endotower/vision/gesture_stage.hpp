@@ -15,6 +15,12 @@
 // Where a region enters twice and no arm leaves its window, the arms are counted on the
 // window of the thinner entry's shaft instead (`thin_window_arms`, default on: a 10 mm
 // grasper crossing a 5 mm tool near the scope; GestureBlob::thin_arms).
+// Two regions each with a single-tool gesture: with a pointer (set_pointer: the tip the
+// surgeon points with, the SCI's cursor) the frame's gesture is the region's whose tip
+// lies within `pointer_fraction` (0.1) x frame width of it and nearer than the other's
+// (a glint patch at the rim read as a closed grasper beside the pointing tool's open
+// one; docs/gestures.md "The pointing tool's gesture"); without one, or with neither
+// near it, none.
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
 // the hold began; moving starts a new hold. Another label (or none) for at most
@@ -35,6 +41,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 
 #include "endotower/app/analysis_stage.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
@@ -80,6 +87,7 @@ struct GestureStageParams {
     double min_confidence = 0.5;
     bool crossing_is_the_frames = true;  // a two-tool gesture outranks other regions
     bool thin_window_arms = true;        // no arm: count them in the thinner shaft's window
+    double pointer_fraction = 0.1;       // two single-tool calls: the one at the pointer
 };
 
 // One frame's gesture: label -1 = none; tip where the gesture's region is (px).
@@ -99,6 +107,9 @@ public:
     void configure(const hal::FrameFormat& format) override;
     void process(app::AnalysisContext& ctx) override;
     const GestureFrame& current() const { return current_; }
+    // `pointer` gives this frame's pointing tip (false: none); called once per frame with
+    // two single-tool calls. Its captures must outlive the stage.
+    void set_pointer(std::function<bool(Point2&)> pointer) { pointer_ = std::move(pointer); }
 
 private:
     GestureFrame current_;
@@ -106,8 +117,9 @@ private:
     const GestureClassifier& classifier_;
     GestureStageParams params_;
     GestureHold hold_;
+    std::function<bool(Point2&)> pointer_;
     std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs_{};
-    double still_px_ = 20;
+    double still_px_ = 20, pointer_px_ = 64;
     int box_ = 10;
 };
 
