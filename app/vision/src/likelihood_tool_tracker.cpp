@@ -118,6 +118,51 @@ bool fit_axis(const Px* begin, const Px* end, Pred use, Line& out, double& n, do
     return true;
 }
 
+// A region part's pixels (those `use` picks) along `axis`: the least and greatest
+// projection, the greatest of those `seen` keeps, the tool probability's sum and the
+// count of solid pixels (`raw` at least `threshold`).
+struct AxisSpan {
+    double lo = std::numeric_limits<double>::max(), hi = -lo, hi_seen = -lo, psum = 0, solid = 0;
+};
+template <typename Use, typename Seen>
+AxisSpan span_along(const Px* begin, const Px* end, const Line& axis, Use use, Seen seen,
+                    const cv::Mat& prob, const cv::Mat& raw, int threshold) {
+    AxisSpan s;
+    for (const Px* p = begin; p != end; ++p)
+        if (use(p)) {
+            const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+            s.lo = std::min(s.lo, t), s.hi = std::max(s.hi, t);
+            if (seen(p)) s.hi_seen = std::max(s.hi_seen, t);
+            s.psum += prob.at<std::uint8_t>(p->y, p->x);
+            s.solid += raw.at<std::uint8_t>(p->y, p->x) >= threshold;
+        }
+    return s;
+}
+
+// The two ends of a part between `lo` and `hi` along `axis`: the mean of its pixels
+// within `band` of each (of those `seen` keeps at the high end), and how many of its
+// pixels lie before `mid`.
+struct AxisEnds {
+    Point2 lo, hi;
+    double before_mid = 0;
+};
+template <typename Use, typename Seen>
+AxisEnds ends_along(const Px* begin, const Px* end, const Line& axis, Use use, Seen seen, double lo,
+                    double hi, double band, double mid) {
+    AxisEnds e;
+    double n_lo = 0, n_hi = 0;
+    for (const Px* p = begin; p != end; ++p)
+        if (use(p)) {
+            const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
+            if (t <= lo + band) e.lo.x += p->x, e.lo.y += p->y, n_lo += 1;
+            if (t >= hi - band && t <= hi && seen(p)) e.hi.x += p->x, e.hi.y += p->y, n_hi += 1;
+            e.before_mid += t < mid;
+        }
+    e.lo = {e.lo.x / n_lo, e.lo.y / n_lo};
+    e.hi = {e.hi.x / n_hi, e.hi.y / n_hi};
+    return e;
+}
+
 // The axis near a region's tip (docs/tracking.md, "The axis near the tip"): the
 // principal axis of its pixels within kTipAxisReach of its length from the tip, where the
 // ray from the tip along it runs through more of the region (within half a width) than
@@ -369,33 +414,21 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     auto measure_floating = [&](const Px* begin, const Px* end, Floating& f) {
         double n = 0, l1 = 0, l2 = 0;
         Line axis;
-        if (!fit_axis(
-                begin, end, [](const Px*) { return true; }, axis, n, l1, l2) ||
-            l2 <= 0 || std::sqrt(l1 / l2) < params_.min_elongation)
+        const auto all = [](const Px*) { return true; };
+        if (!fit_axis(begin, end, all, axis, n, l1, l2) || l2 <= 0 ||
+            std::sqrt(l1 / l2) < params_.min_elongation)
             return false;
-        double lo = std::numeric_limits<double>::max(), hi = -lo, psum = 0, solid = 0;
-        for (const Px* p = begin; p != end; ++p) {
-            const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
-            lo = std::min(lo, t), hi = std::max(hi, t);
-            psum += w.prob.at<std::uint8_t>(p->y, p->x);
-            solid += w.raw.at<std::uint8_t>(p->y, p->x) >= params_.threshold;
-        }
-        if (solid < params_.min_solid_fraction * n) return false;
-        const double band = std::max(1.0, 0.03 * (hi - lo));
-        std::array<double, 2> m{};
-        f.ends[0] = f.ends[1] = {};
-        for (const Px* p = begin; p != end; ++p) {
-            const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
-            for (int k = 0; k < 2; ++k)
-                if (k == 0 ? t <= lo + band : t >= hi - band)
-                    f.ends[k].x += p->x, f.ends[k].y += p->y, m[k] += 1;
-        }
-        for (int k = 0; k < 2; ++k) f.ends[k] = {f.ends[k].x / m[k], f.ends[k].y / m[k]};
+        const AxisSpan span =
+            span_along(begin, end, axis, all, all, w.prob, w.raw, params_.threshold);
+        if (span.solid < params_.min_solid_fraction * n) return false;
+        const double lo = span.lo, hi = span.hi, band = std::max(1.0, 0.03 * (hi - lo));
+        const AxisEnds ends = ends_along(begin, end, axis, all, all, lo, hi, band, 0.5 * (lo + hi));
+        f.ends = {ends.lo, ends.hi};
         f.ux = axis.ux, f.uy = axis.uy;
         f.area = n;
         f.length = std::max(1.0, hi - lo);
         f.width = n / f.length;
-        f.confidence = std::clamp(psum / n / 255.0, 0.0, 1.0);
+        f.confidence = std::clamp(span.psum / n / 255.0, 0.0, 1.0);
         return true;
     };
     for (int i = 1; i < n; ++i) {
@@ -539,32 +572,19 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
                        segment_distance(entry[1 - j], predicted[other], p->x, p->y) <
                            0.5 * w.tracks[other].width + 1.5;
             };
-            double lo = std::numeric_limits<double>::max(), hi = -lo, hi_seen = -lo, psum = 0,
-                   solid = 0;
-            for (const Px* p = begin; p != end; ++p)
-                if (mine(p)) {
-                    const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
-                    lo = std::min(lo, t), hi = std::max(hi, t);
-                    if (!hidden(p)) hi_seen = std::max(hi_seen, t);
-                    psum += w.prob.at<std::uint8_t>(p->y, p->x);
-                    solid += w.raw.at<std::uint8_t>(p->y, p->x) >= params_.threshold;
-                }
-            const bool end_hidden = other >= 0 && hi_seen > lo && hi_seen < hi;
-            if (end_hidden) hi = hi_seen;
+            const AxisSpan span = span_along(
+                begin, end, axis, mine, [&](const Px* p) { return !hidden(p); }, w.prob, w.raw,
+                params_.threshold);
+            const double lo = span.lo, psum = span.psum, solid = span.solid;
+            const bool end_hidden = other >= 0 && span.hi_seen > lo && span.hi_seen < span.hi;
+            const double hi = end_hidden ? span.hi_seen : span.hi;
             const double band = std::max(1.0, 0.03 * (hi - lo));
-            Point2 e_lo, e_hi;
-            double n_lo = 0, n_hi = 0, half_lo = 0;
             const double mid = 0.5 * (lo + hi);
-            for (const Px* p = begin; p != end; ++p)
-                if (mine(p)) {
-                    const double t = (p->x - axis.px) * axis.ux + (p->y - axis.py) * axis.uy;
-                    if (t <= lo + band) e_lo.x += p->x, e_lo.y += p->y, n_lo += 1;
-                    if (t >= hi - band && t <= hi && !(end_hidden && hidden(p)))
-                        e_hi.x += p->x, e_hi.y += p->y, n_hi += 1;
-                    half_lo += t < mid;
-                }
-            e_lo = {e_lo.x / n_lo, e_lo.y / n_lo};
-            e_hi = {e_hi.x / n_hi, e_hi.y / n_hi};
+            const AxisEnds ends = ends_along(
+                begin, end, axis, mine, [&](const Px* p) { return !(end_hidden && hidden(p)); }, lo,
+                hi, band, mid);
+            const Point2 e_lo = ends.lo, e_hi = ends.hi;
+            const double half_lo = ends.before_mid;
             const double d_lo = rim_distance(e_lo.x, e_lo.y), d_hi = rim_distance(e_hi.x, e_hi.y);
             if (std::min(d_lo, d_hi) > touch) continue;  // this part does not reach the rim
             // Both ends at the rim: it lies along the edge of the picture (a caption
