@@ -135,9 +135,13 @@ void SciMachine::execute(const SciItem& item) {
 }
 
 void SciMachine::point(const SciFrame& f) {
-    const int hover = f.tool_count > 0 ? menu().hit(static_cast<float>(f.tools[0].x),
-                                                    static_cast<float>(f.tools[0].y))
-                                       : -1;
+    const auto x = static_cast<float>(f.tools[0].x), y = static_cast<float>(f.tools[0].y);
+    int hover = f.tool_count > 0 ? menu().hit(x, y) : -1;
+    // The item the tip is on stays until the tip is the margin outside it.
+    const auto margin = static_cast<float>(params_.leave_margin_fraction * width_);
+    if (!rearm_ && hover_ >= 0 && hover != hover_ && f.tool_count > 0 &&
+        menu().near(static_cast<std::size_t>(hover_), x, y, margin))
+        hover = hover_;
     if (rearm_) {
         if (hover >= 0) {
             hover_ = -1;

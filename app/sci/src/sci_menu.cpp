@@ -1,5 +1,6 @@
 #include "endotower/sci/sci_menu.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace endotower::sci {
@@ -107,21 +108,23 @@ std::string_view to_string(MenuId m) {
     return "?";
 }
 
+bool SciMenu::near(std::size_t k, float x, float y, float m) const {
+    if (k >= count) return false;
+    const SciItem& i = items[k];
+    if (!i.sector)
+        return x >= i.x - m && x < i.x + i.width + m && y >= i.y - m && y < i.y + i.height + m;
+    const float dx = x - i.cx, dy = y - i.cy, r = std::hypot(dx, dy);
+    if (r < i.r_inner - m || r >= i.r_outer + m) return false;
+    const float grow = m / std::max(r, 1.0f) * 180.0f / kPi;  // the margin as an arc, degrees
+    float a = std::atan2(dy, dx) * 180.0f / kPi;              // clockwise on screen (y down)
+    while (a < i.start_deg - grow) a += 360.0f;
+    while (a >= i.start_deg - grow + 360.0f) a -= 360.0f;
+    return a < i.end_deg + grow;
+}
+
 int SciMenu::hit(float x, float y) const {
-    for (std::size_t k = 0; k < count; ++k) {
-        const SciItem& i = items[k];
-        if (!i.sector) {
-            if (x >= i.x && x < i.x + i.width && y >= i.y && y < i.y + i.height)
-                return static_cast<int>(k);
-            continue;
-        }
-        const float dx = x - i.cx, dy = y - i.cy, r = std::hypot(dx, dy);
-        if (r < i.r_inner || r >= i.r_outer) continue;
-        float a = std::atan2(dy, dx) * 180.0f / kPi;  // clockwise on screen (y down)
-        while (a < i.start_deg) a += 360.0f;
-        while (a >= i.start_deg + 360.0f) a -= 360.0f;
-        if (a < i.end_deg) return static_cast<int>(k);
-    }
+    for (std::size_t k = 0; k < count; ++k)
+        if (near(k, x, y, 0.0f)) return static_cast<int>(k);
     return -1;
 }
 

@@ -159,6 +159,64 @@ TEST(SciMachine, AfterAClickTheTipMustLeaveBeforeTheNextDwell) {
     EXPECT_EQ(d.m.modality(), SciModality::kCt);
 }
 
+// The tracked tip of a tool held on an item's edge trembles across it. The item stays
+// until the tip is `leave_margin_fraction` (0.02 x 640 = 12.8 px) outside it: 8 px out
+// every other frame keeps the highlight and the dwell, which clicks at exactly 2.0 s;
+// 14 px out leaves it.
+TEST(SciMachine, ATipTremblingAcrossAnItemsEdgeKeepsItsDwell) {
+    Driver d;
+    d.press(0, 320, 240);
+    const SciItem& item = d.m.menu().items[static_cast<std::size_t>(
+        d.m.menu().hit(static_cast<float>(d.at("Patient record").first),
+                       static_cast<float>(d.at("Patient record").second)))];
+    const double edge = item.x + item.width, y = item.y + item.height / 2;
+    d.frame(40 * kMs, edge - 2, y);
+    EXPECT_EQ(d.event(), "highlight");
+    for (int k = 2; k < 51; ++k) {
+        d.frame(k * 40 * kMs, k % 2 ? edge + 8 : edge - 2, y);
+        ASSERT_EQ(d.event(), "") << "frame " << k;
+        ASSERT_EQ(d.lit(), "Patient record") << "frame " << k;
+    }
+    d.frame(51 * 40 * kMs, edge + 8, y);  // 2.0 s after the highlight
+    EXPECT_EQ(d.event(), "click");
+    EXPECT_EQ(d.menu(), "patient_record");
+
+    Driver e;
+    e.press(0, 320, 240);
+    e.frame(40 * kMs, edge - 2, y);
+    e.frame(80 * kMs, edge + 12, y);
+    EXPECT_EQ(e.lit(), "Patient record");
+    e.frame(120 * kMs, edge + 14, y);
+    EXPECT_EQ(e.event(), "unhighlight");
+}
+
+// SciMenu::near: an item grown by the margin; a ring sector radially and by that arc
+// at the point's radius. With no margin it is hit().
+TEST(SciMenu, NearIsTheItemGrownByTheMargin) {
+    const SciMenuTable t = build_menus(SciLayout::kRing, kW, kH);
+    const SciMenu& ring = t[static_cast<std::size_t>(MenuId::kMain)];
+    std::size_t k = 0;
+    while (k < ring.count && !ring.items[k].sector) ++k;
+    ASSERT_LT(k, ring.count);
+    const SciItem& s = ring.items[k];
+    const float mid = (s.start_deg + s.end_deg) / 2 * static_cast<float>(M_PI) / 180;
+    auto polar = [&](float r, float a) {
+        return std::pair<float, float>{s.cx + r * std::cos(a), s.cy + r * std::sin(a)};
+    };
+    auto [ox, oy] = polar(s.r_outer + 9, mid);  // 9 px outside the outer radius
+    EXPECT_EQ(ring.hit(ox, oy), -1);
+    EXPECT_TRUE(ring.near(k, ox, oy, 10));
+    EXPECT_FALSE(ring.near(k, ox, oy, 8));
+    const float r = (s.r_inner + s.r_outer) / 2, end = s.end_deg * static_cast<float>(M_PI) / 180;
+    auto [ax, ay] = polar(r, end + 9 / r);  // 9 px of arc past the end
+    EXPECT_NE(ring.hit(ax, ay), static_cast<int>(k));
+    EXPECT_TRUE(ring.near(k, ax, ay, 10));
+    EXPECT_FALSE(ring.near(k, ax, ay, 8));
+    auto [cx, cy] = polar(r, mid);
+    EXPECT_EQ(ring.hit(cx, cy), static_cast<int>(k));
+    EXPECT_TRUE(ring.near(k, cx, cy, 0));
+}
+
 TEST(SciMachine, ScissorsHeldThreeSecondsInTheAreaActivates) {
     Driver d;
     // Outside the area (top of the image): never.

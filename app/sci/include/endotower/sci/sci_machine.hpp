@@ -79,6 +79,10 @@ struct SciParams {
     // dropout tolerance (GestureHoldParams::dropout_ms, 200), while opening them moves
     // the tracked tip.
     double select_grace_ms = 200;
+    // The item under the tip stays until the tip is this far outside it (x width): the
+    // tracked tip of a tool held on an item's edge trembles across it, and each crossing
+    // restarted the dwell (docs/sci.md, "Leaving an item").
+    double leave_margin_fraction = 0.02;
     double still_fraction = 0.03;  // of the width: a tool's tip "still" during a cross hold
     double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
     std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)

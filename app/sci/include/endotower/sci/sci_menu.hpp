@@ -78,6 +78,9 @@ struct SciMenu {
     std::size_t count = 0;
     // The index of the item under (x, y), or -1.
     int hit(float x, float y) const;
+    // Whether (x, y) lies on item k grown by `margin` px on every side (a sector: radially,
+    // and by that arc at the point's radius).
+    bool near(std::size_t k, float x, float y, float margin) const;
 };
 
 using SciMenuTable = std::array<SciMenu, kMenuCount>;
