@@ -8,6 +8,7 @@
 #include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
 #include "reduce_frame.hpp"
+#include "wide_vectors.hpp"
 
 namespace endotower::vision {
 
@@ -62,6 +63,12 @@ int count_arms(const cv::Mat& win, double cx, double cy, double r) {
     return arms;
 }
 
+// The mean of B, G and R, truncated, for one row of `width` pixels.
+ENDOTOWER_WIDE_VECTORS void grey_row(const std::uint8_t* bgr, std::uint8_t* grey, int width) {
+    for (int x = 0; x < width; ++x, bgr += 3)
+        grey[x] = static_cast<std::uint8_t>((bgr[0] + bgr[1] + bgr[2]) / 3);
+}
+
 }  // namespace
 
 GestureSegmenter::GestureSegmenter(const ToolLikelihood* model, GestureSegmenterParams params)
@@ -106,24 +113,16 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     detail::reduce_frame(frame, w.reduce, w.small);
     const int W = w.small.cols, H = w.small.rows;
 
-    // Grey value per pixel and its histogram (four in turn: runs of one grey value do
-    // not wait on one counter).
+    // Grey value per pixel (a vectorised row), then its histogram (four in turn: runs
+    // of one grey value do not wait on one counter).
     std::array<std::array<int, 256>, 4> hists{};
     for (int y = 0; y < H; ++y) {
-        const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
         std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
+        grey_row(w.small.ptr<std::uint8_t>(y), g, W);
         int x = 0;
-        for (; x + 4 <= W; x += 4, p += 12)
-            for (int j = 0; j < 4; ++j) {
-                const auto v =
-                    static_cast<std::uint8_t>((p[3 * j] + p[3 * j + 1] + p[3 * j + 2]) / 3);
-                g[x + j] = v;
-                ++hists[j][v];
-            }
-        for (; x < W; ++x, p += 3) {
-            g[x] = static_cast<std::uint8_t>((p[0] + p[1] + p[2]) / 3);
-            ++hists[0][g[x]];
-        }
+        for (; x + 4 <= W; x += 4)
+            for (int j = 0; j < 4; ++j) ++hists[j][g[x + j]];
+        for (; x < W; ++x) ++hists[0][g[x]];
     }
     std::array<int, 256> hist{};
     for (int v = 0; v < 256; ++v) hist[v] = hists[0][v] + hists[1][v] + hists[2][v] + hists[3][v];

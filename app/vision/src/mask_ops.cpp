@@ -6,6 +6,8 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
+#include "wide_vectors.hpp"
+
 namespace endotower::vision {
 
 namespace {
@@ -33,6 +35,17 @@ int next_set(const std::uint8_t* r, int x, int w) {
     return x;
 }
 
+// The first zero byte of r[x..w), or w (a mask's set bytes are 255: eight at a time).
+int next_clear(const std::uint8_t* r, int x, int w) {
+    for (; x + 8 <= w; x += 8) {
+        std::uint64_t word;
+        std::memcpy(&word, r + x, 8);
+        if (word != ~std::uint64_t{0}) break;
+    }
+    while (x < w && r[x] != 0) ++x;
+    return x;
+}
+
 // cv::distanceTransform's 3x3 L2 weights, CV_FLT_TO_FIX(0.955f / 1.3693f, 16).
 constexpr std::uint32_t kHv = 62587, kDiag = 89738, kFar = INT_MAX >> 2;
 
@@ -49,17 +62,16 @@ void MaskOps::configure(int width, int height) {
     spans_.assign(plane * 4, 0);  // up to four distinct half-widths per element
     tmp_.assign(plane, 0);
     rows_.assign(plane, 0);
-    // New provisional labels go to pixels none of whose earlier 8-neighbours is set:
-    // no two are 8-adjacent, so at most ceil(w / 2) x ceil(h / 2) of them.
-    const std::size_t labels =
-        static_cast<std::size_t>((width_ + 1) / 2) * static_cast<std::size_t>((height_ + 1) / 2) +
-        1;
-    parent_.assign(labels, 0);
-    components_.reserve(labels);
+    // label(): at most ceil(w / 2) runs a row, and as many provisional labels; the
+    // components (8-connected) at most ceil(w / 2) x ceil(h / 2).
+    const std::size_t runs = static_cast<std::size_t>((width_ + 1) / 2) * height_;
+    runs_.assign(runs, Run{});
+    parent_.assign(runs + 1, 0);
+    components_.reserve(static_cast<std::size_t>((width_ + 1) / 2) * ((height_ + 1) / 2) + 1);
     chamfer_.assign(static_cast<std::size_t>(width_ + 2) * (height_ + 2), 0);
 }
 
-LitMoments MaskOps::lit_field(BytePlane g, int threshold, BytePlane lit) {
+ENDOTOWER_WIDE_VECTORS LitMoments MaskOps::lit_field(BytePlane g, int threshold, BytePlane lit) {
     constexpr int kR = 4, kArea = (2 * kR + 1) * (2 * kR + 1);
     const int w = g.width, h = g.height;
     std::uint32_t* col = columns_.data();
@@ -118,7 +130,8 @@ int MaskOps::ellipse_rows(int r, std::array<int, 15>& rows) {
     return m;
 }
 
-void MaskOps::morph(BytePlane in, BytePlane out, std::span<const int> half_widths, bool erode) {
+ENDOTOWER_WIDE_VECTORS void MaskOps::morph(BytePlane in, BytePlane out,
+                                           std::span<const int> half_widths, bool erode) {
     const int w = in.width, h = in.height, c = static_cast<int>(half_widths.size()) / 2;
     const std::uint8_t pad = erode ? 255 : 0;
     const auto plane = static_cast<std::size_t>(w) * h;
@@ -161,8 +174,9 @@ void MaskOps::open3(BytePlane in, BytePlane out) {
     morph(tmp, out, kSquare, false);
 }
 
-void MaskOps::smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out,
-                              BytePlane smoothed) {
+ENDOTOWER_WIDE_VECTORS void MaskOps::smooth_at_least(BytePlane in, int threshold,
+                                                     BytePlane and_mask, BytePlane out,
+                                                     BytePlane smoothed) {
     // Q8.8 taps; the row pass stays in 16 bits (255 x 256), the column pass in 32.
     constexpr std::uint32_t k0 = 22, k1 = 62, k2 = 88;
     const int w = in.width, h = in.height;
@@ -204,53 +218,53 @@ void MaskOps::smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, B
 }
 
 int MaskOps::label(BytePlane m, std::int32_t* labels) {
+    // Runs of set pixels, not pixels: a run's provisional label is its number + 1 in
+    // raster order, and it joins every run of the row above that it touches
+    // (8-connected: overlapping or meeting at a corner). A union keeps the smaller label,
+    // so a set's root is its first run, and the final labels count the sets in the
+    // raster order of their first pixels: cv::connectedComponents' labels.
     const int w = m.width, h = m.height;
+    Run* runs = runs_.data();
     std::int32_t* parent = parent_.data();
     auto root = [parent](std::int32_t a) {
         while (parent[a] != a) a = parent[a] = parent[parent[a]];
         return a;
     };
-    std::int32_t next = 1;
+    std::int32_t count = 0;
+    std::int32_t above = 0, above_end = 0;  // the row above's runs
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* r = m.row(y);
-        std::int32_t* l = labels + static_cast<std::size_t>(y) * w;
-        const std::int32_t* up = y > 0 ? l - w : nullptr;
-        std::memset(l, 0, sizeof(std::int32_t) * w);
-        for (int x = next_set(r, 0, w); x < w; x = next_set(r, x + 1, w)) {
-            std::int32_t lab = 0;
-            const std::int32_t around[4] = {x > 0 ? l[x - 1] : 0, up && x > 0 ? up[x - 1] : 0,
-                                            up ? up[x] : 0, up && x + 1 < w ? up[x + 1] : 0};
-            for (std::int32_t n : around) {
-                if (n == 0) continue;
-                if (lab == 0) {
-                    lab = root(n);
-                    continue;
-                }
-                const std::int32_t a = root(lab), b = root(n);
+        const std::int32_t first = count;
+        std::int32_t j = above;
+        for (int x = next_set(r, 0, w); x < w;) {
+            const int end = next_clear(r, x + 1, w);
+            const std::int32_t id = ++count;
+            runs[id - 1] = {y, x, end};
+            parent[id] = id;
+            std::int32_t lab = id;
+            while (j < above_end && runs[j].end < x) ++j;  // ends left of x - 1
+            for (std::int32_t k = j; k < above_end && runs[k].start <= end; ++k) {
+                const std::int32_t a = root(lab), b = root(k + 1);
                 lab = std::min(a, b);
                 parent[std::max(a, b)] = lab;
             }
-            if (lab == 0) {
-                lab = next++;
-                parent[lab] = lab;
-            }
-            l[x] = lab;
+            x = next_set(r, end, w);
         }
+        above = first, above_end = count;
     }
-    // Final labels in the order of the provisional ones (= first pixels, raster order):
-    // a set's smallest provisional label is its root.
     std::int32_t n = 1;
-    for (std::int32_t i = 1; i < next; ++i) parent[i] = parent[i] == i ? n++ : parent[parent[i]];
+    for (std::int32_t i = 1; i <= count; ++i) parent[i] = parent[i] == i ? n++ : parent[parent[i]];
     components_.assign(static_cast<std::size_t>(n), Component{w, h, -1, -1, 0});
-    for (int y = 0; y < h; ++y) {
-        const std::uint8_t* r = m.row(y);
-        std::int32_t* l = labels + static_cast<std::size_t>(y) * w;
-        for (int x = next_set(r, 0, w); x < w; x = next_set(r, x + 1, w)) {
-            Component& c = components_[l[x] = parent[l[x]]];
-            ++c.area;
-            c.left = std::min(c.left, x), c.right = std::max(c.right, x);
-            c.top = std::min(c.top, y), c.bottom = std::max(c.bottom, y);
-        }
+    std::memset(labels, 0, sizeof(std::int32_t) * static_cast<std::size_t>(w) * h);
+    for (std::int32_t i = 0; i < count; ++i) {
+        const Run& run = runs[i];
+        const std::int32_t lab = parent[i + 1];
+        std::fill(labels + static_cast<std::size_t>(run.y) * w + run.start,
+                  labels + static_cast<std::size_t>(run.y) * w + run.end, lab);
+        Component& c = components_[lab];
+        c.area += run.end - run.start;
+        c.left = std::min(c.left, run.start), c.right = std::max(c.right, run.end - 1);
+        c.top = std::min(c.top, run.y), c.bottom = std::max(c.bottom, run.y);
     }
     return n;
 }

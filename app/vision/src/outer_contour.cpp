@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 
 namespace endotower::vision {
 
@@ -103,6 +104,27 @@ std::span<const IntPoint> ContourTracer::largest(const std::uint8_t* mask, int w
     return best_;
 }
 
+namespace {
+
+// The first cell of p[j..end] that is not background (0), or end + 1: eight at a time.
+int zeros_to(const std::int8_t* p, int j, int end) {
+    for (; j + 8 <= end + 1; j += 8) {
+        std::uint64_t word;
+        std::memcpy(&word, p + j, 8);
+        if (word != 0) break;
+    }
+    while (j <= end && p[j] == 0) ++j;
+    return j;
+}
+
+// The first background cell of p[j..end], or end + 1.
+int set_to(const std::int8_t* p, int j, int end) {
+    while (j <= end && p[j] != 0) ++j;
+    return j;
+}
+
+}  // namespace
+
 void ContourTracer::holes(int& largest, int& second) {
     largest = second = 0;
     if (last_width_ <= 0) return;
@@ -121,14 +143,14 @@ void ContourTracer::holes(int& largest, int& second) {
             const int y = i / s, row = y * s;
             int l = i, r = i;
             while (l > row && img[l - 1] == 0) --l;
-            while (r < row + s - 1 && img[r + 1] == 0) ++r;
+            r = zeros_to(img, i, row + s - 1) - 1;
             std::fill(img + l, img + r + 1, std::int8_t{3});
             count += r - l + 1;
-            for (const int dy : {-1, 1}) {
+            for (const int dy : {-1, 1}) {  // each run of background above and below l..r
                 if (y + dy < 0 || y + dy >= rows) continue;
-                const int o = dy * s;
-                for (int j = l; j <= r; ++j)
-                    if (img[j + o] == 0 && (j == l || img[j + o - 1] != 0)) stack_.push_back(j + o);
+                const std::int8_t* q = img + dy * s;
+                for (int j = l; (j = set_to(q, j, r)) <= r; j = zeros_to(q, j, r))
+                    stack_.push_back(j + dy * s);
             }
         }
         return count;

@@ -64,6 +64,7 @@ TEST(BlockMean, OddFactorsGiveTheInterAreaBytes) {
     expect_like_inter_area(1920, 1080, 3, 3);
     expect_like_inter_area(1000, 600, 5, 3);
     expect_like_inter_area(630, 357, 7, 1);
+    expect_like_inter_area(960, 540, 3, 1);
     expect_like_inter_area(64, 48, 1, 3);  // a copy
 }
 

@@ -112,6 +112,26 @@ TEST(MaskOps, LabelsAreOpenCvsComponentsWithTheirStats) {
     }
 }
 
+// The most runs a mask can have (every other pixel of every row set, odd width):
+// label() works on runs, sized for ceil(w / 2) of them a row. A checkerboard is one
+// 8-connected component; every other column alone is one per column.
+TEST(MaskOps, TheMostRunsAMaskCanHave) {
+    for (const bool checker : {true, false}) {
+        cv::Mat m(9, 15, CV_8U, cv::Scalar(0));
+        for (int y = 0; y < m.rows; ++y)
+            for (int x = checker ? y % 2 : 0; x < m.cols; x += 2) m.at<std::uint8_t>(y, x) = 255;
+        MaskOps ops;
+        ops.configure(m.cols, m.rows);
+        cv::Mat labels(m.size(), CV_32S);
+        const int n = ops.label(plane(m), labels.ptr<std::int32_t>(0));
+        cv::Mat want;
+        ASSERT_EQ(n, cv::connectedComponents(m, want, 8)) << checker;
+        ASSERT_EQ(n, checker ? 2 : 9);  // with the background
+        EXPECT_EQ(ops.components()[1].area, checker ? 68 : 9);
+        EXPECT_EQ(labels.at<int>(8, 14), checker ? 1 : 8);
+    }
+}
+
 TEST(MaskOps, ChamferInAComponentsBoxIsTheDistanceTransform) {
     for (int seed = 1; seed <= 3; ++seed) {
         cv::Mat m = blobs(320, 200, seed + 20);

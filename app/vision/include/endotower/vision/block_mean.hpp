@@ -29,7 +29,8 @@ public:
 private:
     int factor_ = 0, channels_ = 0, dst_width_ = 0, dst_height_ = 0;
     std::vector<std::uint16_t> columns_;  // one output row's k-row column sums
-    std::vector<std::uint16_t> sums_;     // k = 2, 3, 4, 6 (3 channels): k-pixel sums
+    std::vector<std::uint16_t> sums_;     // k = 2, 4, 6 (3 channels): k-pixel sums
+    std::vector<std::uint8_t> means_;     // k = 3 (3 channels): every position's mean
     std::vector<std::uint8_t> mean_;      // block sum -> rounded mean
 };
 

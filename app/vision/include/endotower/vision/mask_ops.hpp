@@ -67,6 +67,10 @@ private:
     std::vector<std::uint32_t> columns_, padded_sums_, box_;
     std::vector<std::uint16_t> rows_;  // smooth_at_least's horizontal pass
     std::vector<std::uint8_t> padded_, spans_, tmp_;
+    struct Run {
+        int y = 0, start = 0, end = 0;  // [start, end) of row y
+    };
+    std::vector<Run> runs_;
     std::vector<std::int32_t> parent_;
     std::vector<Component> components_;
     std::vector<std::uint32_t> chamfer_;
