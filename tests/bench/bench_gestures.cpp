@@ -4,11 +4,15 @@
 // allocations per frame (operator new, and the C allocator, which OpenCV's buffers
 // come from; every thread), CPU time of the whole process (OpenCV's worker threads too).
 // ENDOTOWER_GESTURE_MODEL=FILE benchmarks another gesture model (e.g. a profile one).
+// `--frames N` runs N frames without the benchmark and prints a checksum (run_frames).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -21,49 +25,63 @@ namespace {
 
 using namespace endotower;
 
-void BM_Gestures1080pTwoTools(benchmark::State& state) {
-    const std::string root = ENDOTOWER_SOURCE_DIR;
-    std::string error;
+// The benchmark's models and its four rendered frames (fig. 3.12e-h at 1920x1080).
+struct GestureFrames {
     vision::ToolLikelihood tool_model;
     vision::GestureClassifier classifier;
-    scene::Scenario scenario;
-    if (!tool_model.load(root + "/board/sim/models/tool_likelihood.bin", error) ||
-        !classifier.load(std::getenv("ENDOTOWER_GESTURE_MODEL") != nullptr
-                             ? std::getenv("ENDOTOWER_GESTURE_MODEL")
-                             : root + "/board/sim/models/gestures.yml",
-                         error) ||
-        !scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml", scenario,
-                              error)) {
-        state.SkipWithError(error.c_str());
-        return;
-    }
-    scenario.width = 1920;
-    scenario.height = 1080;
-    scene::SceneRenderer renderer;
-    if (!renderer.init(scenario, 312, error)) {
-        state.SkipWithError(error.c_str());
-        return;
-    }
-    std::vector<scene::Image> frames(4);
-    for (int i = 0; i < 4; ++i) {
-        scene::FrameTruth truth;
-        renderer.render(i * 4, frames[i], truth);
-    }
-    vision::GestureSegmenterParams p;
-    p.method = classifier.segmentation();
-    p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
-    vision::GestureSegmenter segmenter(&tool_model, p);
+    std::vector<scene::Image> frames = std::vector<scene::Image>(4);
+    std::unique_ptr<vision::GestureSegmenter> segmenter;
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
-    segmenter.configure(fmt);
+
+    bool init(std::string& error) {
+        const std::string root = ENDOTOWER_SOURCE_DIR;
+        scene::Scenario scenario;
+        const char* model = std::getenv("ENDOTOWER_GESTURE_MODEL");
+        if (!tool_model.load(root + "/board/sim/models/tool_likelihood.bin", error) ||
+            !classifier.load(model != nullptr ? model : root + "/board/sim/models/gestures.yml",
+                             error) ||
+            !scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml",
+                                  scenario, error))
+            return false;
+        scenario.width = 1920;
+        scenario.height = 1080;
+        scene::SceneRenderer renderer;
+        if (!renderer.init(scenario, 312, error)) return false;
+        for (int i = 0; i < 4; ++i) {
+            scene::FrameTruth truth;
+            renderer.render(i * 4, frames[i], truth);
+        }
+        vision::GestureSegmenterParams p;
+        p.method = classifier.segmentation();
+        p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
+        segmenter = std::make_unique<vision::GestureSegmenter>(&tool_model, p);
+        segmenter->configure(fmt);
+        return true;
+    }
+    hal::Frame frame(std::size_t i) {
+        hal::Frame f;
+        f.format = fmt;
+        f.data = frames[i % frames.size()].bgr.data();
+        return f;
+    }
+};
+
+void BM_Gestures1080pTwoTools(benchmark::State& state) {
+    std::string error;
+    GestureFrames g;
+    if (!g.init(error)) {
+        state.SkipWithError(error.c_str());
+        return;
+    }
+    vision::GestureSegmenter& segmenter = *g.segmenter;
+    const vision::GestureClassifier& classifier = g.classifier;
     std::array<vision::GestureBlob, vision::GestureSegmenter::kMaxBlobs> blobs{};
     std::vector<double> ms;
     ms.reserve(100000);
     std::size_t i = 0, found = 0;
     std::int64_t allocs = 0, c_allocs = 0;
     for (auto _ : state) {
-        hal::Frame f;
-        f.format = fmt;
-        f.data = frames[i++ % frames.size()].bgr.data();
+        const hal::Frame f = g.frame(i++);
         const std::int64_t a0 = bench::allocations(), c0 = bench::c_allocations();
         const auto t0 = std::chrono::steady_clock::now();
         const std::size_t n = segmenter.segment(f, blobs);
@@ -88,6 +106,52 @@ BENCHMARK(BM_Gestures1080pTwoTools)
     ->MeasureProcessCPUTime()
     ->UseRealTime();
 
+// `--frames N`: N frames in turn instead of the benchmark, then a checksum (FNV-1a) of
+// what the first four gave: the mask, each region's tip, radius, arms, features and label.
+// A change that must not change the output leaves it as it was; under callgrind it counts
+// the instructions per frame (docs/performance.md).
+int run_frames(int n) {
+    std::string error;
+    GestureFrames g;
+    if (!g.init(error)) {
+        std::fprintf(stderr, "bench_gestures: %s\n", error.c_str());
+        return 1;
+    }
+    std::uint64_t sum = 1469598103934665603ull;
+    auto mix = [&sum](const void* data, std::size_t size) {
+        for (std::size_t i = 0; i < size; ++i)
+            sum = (sum ^ static_cast<const unsigned char*>(data)[i]) * 1099511628211ull;
+    };
+    std::array<vision::GestureBlob, vision::GestureSegmenter::kMaxBlobs> blobs{};
+    for (int i = 0; i < n; ++i) {
+        const std::size_t found = g.segmenter->segment(g.frame(static_cast<std::size_t>(i)), blobs);
+        for (std::size_t b = 0; b < found; ++b) {
+            const int label = g.classifier.classify(blobs[b].features, blobs[b].entries).label;
+            if (i >= 4) continue;
+            const auto v = blobs[b].features.as_vector();
+            mix(&label, sizeof label);
+            mix(&blobs[b].tip, sizeof blobs[b].tip);
+            mix(&blobs[b].radius_px, sizeof blobs[b].radius_px);
+            mix(&blobs[b].arms, sizeof blobs[b].arms);
+            mix(v.data(), sizeof(float) * v.size());
+        }
+        if (i < 4) {
+            mix(&found, sizeof found);
+            const auto mask = g.segmenter->mask();
+            mix(mask.data(), mask.size());
+        }
+    }
+    std::printf("%d frames, checksum %016llx\n", n, static_cast<unsigned long long>(sum));
+    return 0;
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+    if (argc == 3 && std::string(argv[1]) == "--frames") return run_frames(std::atoi(argv[2]));
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
