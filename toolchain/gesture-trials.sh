@@ -3,7 +3,9 @@
 # fig. 3.22 (grasper, scissors) and fig. 3.23 suites at --scale 15 (30 frames = 1.2 s
 # per state), replays them with only the gesture stage on and scores the traces with
 # 'endotower eval'; prints each suite's summary and confusion table.
-# Usage: toolchain/gesture-trials.sh [OUT] [MODEL]
+# Usage: [SUITES="..."] toolchain/gesture-trials.sh [OUT] [MODEL]
+#   SUITES scenarios under board/sim/scenarios, without .yaml (default the three above;
+#          e.g. "gestures/test_random40_double": the random poses, docs/gestures.md)
 #   OUT    work and report folder (default build/gesture-eval)
 #   MODEL  gesture model (default board/sim/models/gestures.yml, the shipped one)
 set -euo pipefail
@@ -23,9 +25,10 @@ analysis:
     model: $model
     hold_ms: 1000
 BOARD
-for s in fig322_grasper_orientations fig322_scissors_orientations fig323_double_gestures; do
+for scenario in ${SUITES:-fig322_grasper_orientations fig322_scissors_orientations fig323_double_gestures}; do
+  s=$(basename "$scenario")
   [ -f "$out/$s/truth.jsonl" ] ||
-    "$bin" scene --scenario "$root/board/sim/scenarios/$s.yaml" --scale 15 --out "$out/$s" >/dev/null
+    "$bin" scene --scenario "$root/board/sim/scenarios/$scenario.yaml" --scale 15 --out "$out/$s" >/dev/null
   "$bin" sim --board "$out/board.yaml" --input "$out/$s/frames" --trace "$out/$s.jsonl" \
     --out "$out/$s.mkv" >/dev/null
   "$bin" eval --trace "$out/$s.jsonl" --truth "$out/$s/truth.jsonl" --report "$out/report_$s" |
