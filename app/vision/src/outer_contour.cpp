@@ -18,6 +18,23 @@ std::int64_t cross(IntPoint o, IntPoint a, IntPoint b) {
     return std::int64_t{a.x - o.x} * (b.y - o.y) - std::int64_t{a.y - o.y} * (b.x - o.x);
 }
 
+// The first cell of p[j..end] that is not background (0), or end + 1: eight at a time.
+int zeros_to(const std::int8_t* p, int j, int end) {
+    for (; j + 8 <= end + 1; j += 8) {
+        std::uint64_t word;
+        std::memcpy(&word, p + j, 8);
+        if (word != 0) break;
+    }
+    while (j <= end && p[j] == 0) ++j;
+    return j;
+}
+
+// The first background cell of p[j..end], or end + 1.
+int set_to(const std::int8_t* p, int j, int end) {
+    while (j <= end && p[j] != 0) ++j;
+    return j;
+}
+
 }  // namespace
 
 void ContourTracer::reserve(int width, int height) {
@@ -104,27 +121,6 @@ std::span<const IntPoint> ContourTracer::largest(const std::uint8_t* mask, int w
     return best_;
 }
 
-namespace {
-
-// The first cell of p[j..end] that is not background (0), or end + 1: eight at a time.
-int zeros_to(const std::int8_t* p, int j, int end) {
-    for (; j + 8 <= end + 1; j += 8) {
-        std::uint64_t word;
-        std::memcpy(&word, p + j, 8);
-        if (word != 0) break;
-    }
-    while (j <= end && p[j] == 0) ++j;
-    return j;
-}
-
-// The first background cell of p[j..end], or end + 1.
-int set_to(const std::int8_t* p, int j, int end) {
-    while (j <= end && p[j] != 0) ++j;
-    return j;
-}
-
-}  // namespace
-
 void ContourTracer::holes(int& largest, int& second) {
     largest = second = 0;
     if (last_width_ <= 0) return;
@@ -141,9 +137,9 @@ void ContourTracer::holes(int& largest, int& second) {
             stack_.pop_back();
             if (img[i] != 0) continue;  // pushed twice, filled since
             const int y = i / s, row = y * s;
-            int l = i, r = i;
+            int l = i;
             while (l > row && img[l - 1] == 0) --l;
-            r = zeros_to(img, i, row + s - 1) - 1;
+            const int r = zeros_to(img, i, row + s - 1) - 1;
             std::fill(img + l, img + r + 1, std::int8_t{3});
             count += r - l + 1;
             for (const int dy : {-1, 1}) {  // each run of background above and below l..r
