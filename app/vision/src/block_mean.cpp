@@ -21,8 +21,10 @@ bool BlockMean::configure(int src_width, int src_height, int dst_width, int dst_
     dst_width_ = dst_width;
     dst_height_ = dst_height;
     columns_.assign(static_cast<std::size_t>(src_width) * channels, 0);
-    sums_.assign(columns_.size(), 0);
-    means_.assign(k == 3 && channels == 3 ? columns_.size() : 0, 0);
+    // Each 3-channel row path's scratch row: k-pixel sums (k = 2, 4, 6), means (k = 3).
+    const bool rgb = channels == 3;
+    sums_.assign(rgb && (k == 2 || k == 4 || k == 6) ? columns_.size() : 0, 0);
+    means_.assign(rgb && k == 3 ? columns_.size() : 0, 0);
     const int area = k * k;
     mean_.resize(static_cast<std::size_t>(255) * area + 1);
     // OpenCV's rounding of the block sum s: half up for k = 2 (its 2 x 2 path), else
