@@ -23,6 +23,7 @@ analysis:
   tool_model: $root/board/sim/models/tool_likelihood.bin
   gestures:
     model: $model
+    tool_model: $root/board/sim/models/gesture_tool_likelihood.bin
     hold_ms: 1000
 BOARD
 for scenario in ${SUITES:-fig322_grasper_orientations fig322_scissors_orientations fig323_double_gestures}; do

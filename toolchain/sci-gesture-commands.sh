@@ -38,6 +38,7 @@ analysis:
   tool_model: $root/board/sim/models/tool_likelihood.bin
   gestures:
     model: ${GESTURES:-$root/board/sim/models/gestures.yml}
+    tool_model: $root/board/sim/models/gesture_tool_likelihood.bin
 sci:
   layout: ring
   media: $root/board/sim/sci_media

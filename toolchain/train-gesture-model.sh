@@ -53,7 +53,7 @@ case " $* " in
     ;;
 esac
 mkdir -p "$(dirname "$out")"
-tool_model=$root/board/sim/models/tool_likelihood.bin
+tool_model=$root/board/sim/models/gesture_tool_likelihood.bin  # toolchain/train-tool-model.sh --gestures
 # Stage 1: every network, training regions labelled by the fixed match distance
 # (--match-widths 0), as the models before 2026-11-27 (evening) were trained.
 case " $* " in

@@ -277,11 +277,15 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
     bool gestures = false;
     if (board.gestures) {
         gestures = p.gesture_classifier.load(board.gesture_model, error);
+        // The segmenter's own pixel model when the board names one (the shipped one leaves
+        // out the tracker's real image, whose pink-tinged metal makes wet tissue's sheen
+        // read as tool: docs/gestures.md), else the tracker's.
+        const bool own = !board.gesture_tool_model.empty();
         if (gestures &&
             p.gesture_classifier.segmentation() == vision::GestureSegmentation::kLikelihood &&
-            !p.gesture_tool_model.load(board.tool_model, error)) {
-            error =
-                "the gesture model's likelihood segmentation needs analysis.tool_model: " + error;
+            !p.gesture_tool_model.load(own ? board.gesture_tool_model : board.tool_model, error)) {
+            error = std::string("the gesture model's likelihood segmentation needs ") +
+                    (own ? "analysis.gestures.tool_model" : "analysis.tool_model") + ": " + error;
             gestures = false;
         }
         if (!gestures)

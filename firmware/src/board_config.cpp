@@ -291,9 +291,12 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
                           "train-tool-model')");
         if (const YAML::Node g = a["gestures"]) {
             if (!g.IsMap())
-                return r.fail(g, "analysis.gestures", "expected a map {model: FILE, hold_ms: N}");
-            if (!r.keys(g, "analysis.gestures", {"model", "hold_ms"}) ||
+                return r.fail(g, "analysis.gestures",
+                              "expected a map {model: FILE, tool_model: FILE, hold_ms: N}");
+            if (!r.keys(g, "analysis.gestures", {"model", "tool_model", "hold_ms"}) ||
                 !r.confined(g, "model", "analysis.gestures.model", c.gesture_model) ||
+                !r.confined(g, "tool_model", "analysis.gestures.tool_model",
+                            c.gesture_tool_model) ||
                 !r.number(g, "hold_ms", "analysis.gestures.hold_ms", 0, 60000, c.gesture_hold_ms))
                 return false;
             if (c.gesture_model.empty())
@@ -398,8 +401,8 @@ bool load_board(const std::string& path, BoardConfig& out, std::string& error) {
     if (!load_input_devices(r, root, c)) return false;
     const fs::path base = fs::path(path).parent_path();
     for (std::string* p : {&c.sim_input, &c.sim_events, &c.sim_output, &c.sim_frames, &c.sim_trace,
-                           &c.tool_model, &c.calibration, &c.gesture_model, &c.storage,
-                           &c.sci_media, &c.sci_patient_record, &c.region_media})
+                           &c.tool_model, &c.calibration, &c.gesture_model, &c.gesture_tool_model,
+                           &c.storage, &c.sci_media, &c.sci_patient_record, &c.region_media})
         *p = resolve(base, *p);
     if (c.region_media.empty()) c.region_media = c.sci_media;
     out = std::move(c);

@@ -44,6 +44,8 @@ struct BoardConfig {
     // analysis.gestures (issue 6): on when the map is present
     bool gestures = false;
     std::string gesture_model;  // a file of 'endotower train-gestures'
+    // analysis.gestures.tool_model: the segmenter's pixel model; "" = analysis.tool_model
+    std::string gesture_tool_model;
     // analysis.markers (issue 6): strip-marker tracking (docs/markers.md)
     bool markers = false;
     // analysis.fov_mask: with a calibration, blacken the analysis frame outside the field

@@ -2,6 +2,7 @@
 
 #include "endotower/calibration/calibration_file.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
+#include "endotower/vision/tool_likelihood.hpp"
 
 #include <unistd.h>
 
@@ -101,6 +102,19 @@ Check check_gesture_model(const std::string& path) {
     vision::GestureClassifier classifier;
     std::string error;
     if (!classifier.load(path, error)) return make(name, Check::Result::kFail, error);
+    return make(name, Check::Result::kPass, path);
+}
+
+Check check_gesture_pixel_model(const std::string& path) {
+    const char* name = "gesture pixel model file";
+    if (path.empty())
+        return make(name, Check::Result::kSkip,
+                    "no analysis.gestures.tool_model in the board file (the gestures use "
+                    "analysis.tool_model)");
+    // ToolLikelihood's own loader: header, size and checksum (docs/tracking.md).
+    vision::ToolLikelihood model;
+    std::string error;
+    if (!model.load(path, error)) return make(name, Check::Result::kFail, error);
     return make(name, Check::Result::kPass, path);
 }
 

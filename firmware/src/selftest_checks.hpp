@@ -36,6 +36,9 @@ Check check_calibration(const std::string& path);
 // The gesture model: a readable, non-empty YAML or JSON mapping. The project does
 // not define its contents yet, so only the structure is checked. Skip when "".
 Check check_gesture_model(const std::string& path);
+// The gesture segmenter's pixel model (analysis.gestures.tool_model) loads as the gesture
+// stage loads it (ToolLikelihood: header, size, checksum). Skip when "".
+Check check_gesture_pixel_model(const std::string& path);
 
 // Writes DIR/selftest.txt and DIR/selftest.json. False with `error`.
 bool write_report(const std::string& dir, const SelftestReport& report, std::string& error);

@@ -191,6 +191,7 @@ int run_selftest_command(const Args& args) {
     add(check_storage(board.storage));
     add(check_calibration(board.calibration));
     add(check_gesture_model(board.gesture_model));
+    add(check_gesture_pixel_model(board.gesture_tool_model));
 
     // Display first: the test pattern shows while everything else is checked.
     system::MonotonicClock clock;

@@ -37,7 +37,7 @@ struct GestureFrames {
         const std::string root = ENDOTOWER_SOURCE_DIR;
         scene::Scenario scenario;
         const char* model = std::getenv("ENDOTOWER_GESTURE_MODEL");
-        if (!tool_model.load(root + "/board/sim/models/tool_likelihood.bin", error) ||
+        if (!tool_model.load(root + "/board/sim/models/gesture_tool_likelihood.bin", error) ||
             !classifier.load(model != nullptr ? model : root + "/board/sim/models/gestures.yml",
                              error) ||
             !scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml",

@@ -33,6 +33,8 @@ TEST(Board, TheShippedSimBoardLoads) {
     EXPECT_FALSE(b.sim_realtime);
     EXPECT_TRUE(b.gestures);
     EXPECT_TRUE(fs::exists(b.gesture_model)) << b.gesture_model;
+    EXPECT_TRUE(fs::exists(b.gesture_tool_model)) << b.gesture_tool_model;
+    EXPECT_NE(fs::canonical(b.gesture_tool_model), fs::canonical(b.tool_model));
     EXPECT_DOUBLE_EQ(b.gesture_hold_ms, 1000.0);
 }
 
@@ -139,7 +141,7 @@ TEST(Board, DisplayAndPaths) {
                                       "display: {card: /dev/dri/card1, connector: HDMI-A-2, mode: 1280x720@50,\n"
                                       "          zero_copy: false, atomic: false}\n"
                                       "calibration: cal.json\n"
-                                      "analysis: {gestures: {model: /opt/m.yml}}\n"
+                                      "analysis: {gestures: {model: /opt/m.yml, tool_model: px.bin}}\n"
                                       "paths: {storage: store}\n");
     BoardConfig b;
     std::string err;
@@ -154,6 +156,7 @@ TEST(Board, DisplayAndPaths) {
     EXPECT_DOUBLE_EQ(b.latency_budget_ms, 18.7);
     EXPECT_EQ(b.calibration, (fs::path(p).parent_path() / "cal.json").string());
     EXPECT_EQ(b.gesture_model, "/opt/m.yml");
+    EXPECT_EQ(b.gesture_tool_model, (fs::path(p).parent_path() / "px.bin").string());
     EXPECT_EQ(b.storage, (fs::path(p).parent_path() / "store").string());
 
     // Defaults: 1920x1080@60 on the first card's first connected connector.
@@ -221,13 +224,15 @@ TEST(Board, ErrorsNameTheLineAndField) {
         {"board: t\n? [a, b]\n: c\n", "2: field '(top level)': a key must be a plain name"},
         {"board: t\nsim:\n  ? {x: 1}\n  : y\n", "3: field 'sim': a key must be a plain name"},
         {"board: t\nanalysis:\n  gestures: {model: g.yml, hold: 3}\n",
-         "3: field 'analysis.gestures.hold': unknown key (expected one of: model, hold_ms)"},
+         "3: field 'analysis.gestures.hold': unknown key (expected one of: model, tool_model, "
+         "hold_ms)"},
         {"board: t\nanalysis:\n  gestures:\n    hold_ms: 500\n",
          "4: field 'analysis.gestures.model': missing (a file of 'endotower train-gestures')"},
         {"board: t\nanalysis:\n  gestures:\n    model: g.yml\n    hold_ms: -5\n",
          "5: field 'analysis.gestures.hold_ms': must be between 0 and 60000, got -5"},
         {"board: t\nanalysis:\n  gestures: on\n",
-         "3: field 'analysis.gestures': expected a map {model: FILE, hold_ms: N}"},
+         "3: field 'analysis.gestures': expected a map {model: FILE, tool_model: FILE, hold_ms: "
+         "N}"},
     };
     for (const auto& c : cases) {
         const std::string p = write_board("bad.yaml", c.text);
@@ -395,6 +400,8 @@ TEST(BoardPaths, RelativePathsMayNotLeaveTheBoardDirectory) {
         {"board: t\ncalibration: etc_link/passwd\n", "calibration", "etc_link/passwd", 2},
         {"board: t\nanalysis:\n  tool_model: ../m.bin\n", "analysis.tool_model", "../m.bin", 3},
         {"board: t\nanalysis:\n  gestures: {model: ../../g.yml}\n", "analysis.gestures.model", "../../g.yml", 3},
+        {"board: t\nanalysis:\n  gestures: {model: g.yml, tool_model: ../p.bin}\n",
+         "analysis.gestures.tool_model", "../p.bin", 3},
         {"board: t\nsim:\n  input: ../clip.mp4\n", "sim.input", "../clip.mp4", 3},
         {"board: t\nsim:\n  events: ../../../events.txt\n", "sim.events", "../../../events.txt", 3},
     };

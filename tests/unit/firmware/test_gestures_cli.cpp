@@ -66,7 +66,7 @@ protected:
         vision::ToolLikelihood tool_model;
         vision::GestureClassifier classifier;
         std::string error;
-        EXPECT_TRUE(tool_model.load(kModels + "tool_likelihood.bin", error)) << error;
+        EXPECT_TRUE(tool_model.load(kModels + "gesture_tool_likelihood.bin", error)) << error;
         EXPECT_TRUE(classifier.load(kModels + "gestures.yml", error)) << error;
         vision::GestureSegmenterParams p;
         p.method = classifier.segmentation();
@@ -168,7 +168,7 @@ TEST_F(Gestures, AnOpenTenMillimetreGrasperIsLabelledByItsWidth) {
         << slurp(dir() / "scene.err");
     vision::ToolLikelihood tool_model;
     std::string error;
-    ASSERT_TRUE(tool_model.load(kModels + "tool_likelihood.bin", error)) << error;
+    ASSERT_TRUE(tool_model.load(kModels + "gesture_tool_likelihood.bin", error)) << error;
     vision::GestureSegmenterParams p;
     p.profile = true;
     vision::GestureSegmenter segmenter(&tool_model, p);
@@ -200,12 +200,13 @@ TEST_F(Gestures, AnOpenTenMillimetreGrasperIsLabelledByItsWidth) {
 
 namespace {
 
-fs::path board(const fs::path& dir, const std::string& model, double hold_ms) {
+fs::path board(const fs::path& dir, const std::string& model, double hold_ms,
+               const std::string& pixel_model = kModels + "gesture_tool_likelihood.bin") {
     fs::path b = dir / ("board_" + std::to_string(static_cast<int>(hold_ms)) + ".yaml");
     std::ofstream(b) << "board: test\nanalysis:\n  stage: none\n  tracker: none\n  tool_model: "
                      << kModels << "tool_likelihood.bin\n  gestures: {model: " << model
-                     << ", hold_ms: " << hold_ms << "}\nsim:\n  events: " << kRoot
-                     << "/board/sim/events.txt\n";
+                     << ", tool_model: " << pixel_model << ", hold_ms: " << hold_ms
+                     << "}\nsim:\n  events: " << kRoot << "/board/sim/events.txt\n";
     return b;
 }
 
@@ -228,6 +229,29 @@ TEST_F(Gestures, CorruptModelDisablesGesturesNotTheVideo) {
     EXPECT_NE(err.find("gesture recognition disabled"), std::string::npos) << err;
     const std::string t = slurp(trace);
     EXPECT_EQ(t.find("\"gesture\""), std::string::npos);
+    EXPECT_NE(slurp(dir() / "out.txt").find("28 frames in, 28 out"), std::string::npos)
+        << slurp(dir() / "out.txt");
+}
+
+TEST_F(Gestures, CorruptPixelModelDisablesGesturesNotTheVideo) {
+    // analysis.gestures.tool_model, the segmenter's own model: one flipped bit.
+    const fs::path rec = scene("fig322_grasper_orientations.yaml");
+    std::string bytes = slurp(kModels + "gesture_tool_likelihood.bin");
+    ASSERT_FALSE(bytes.empty());
+    bytes[bytes.size() / 2] ^= 0x10;
+    std::ofstream(dir() / "corrupt_px.bin", std::ios::binary) << bytes;
+    const fs::path trace = dir() / "corrupt_px_trace.jsonl";
+    const fs::path b =
+        board(dir(), kModels + "gestures.yml", 1000, (dir() / "corrupt_px.bin").string());
+    ASSERT_EQ(run("sim --board " + b.string() + " --input " + (rec / "frames").string() +
+                  " --trace " + trace.string() + " --out " + (dir() / "c.mkv").string()),
+              0)
+        << slurp(dir() / "out.err");
+    const std::string err = slurp(dir() / "out.err");
+    EXPECT_NE(err.find("needs analysis.gestures.tool_model: "), std::string::npos) << err;
+    EXPECT_NE(err.find("corrupt_px.bin"), std::string::npos) << err;
+    EXPECT_NE(err.find("gesture recognition disabled"), std::string::npos) << err;
+    EXPECT_EQ(slurp(trace).find("\"gesture\""), std::string::npos);
     EXPECT_NE(slurp(dir() / "out.txt").find("28 frames in, 28 out"), std::string::npos)
         << slurp(dir() / "out.txt");
 }

@@ -51,19 +51,25 @@ std::string text(const nlohmann::json& v) {
 // Renders a scenario of board/sim/scenarios/sci (NAME plus scene options) into dir/scene
 // and replays it with the likelihood tracker, the shipped gesture model and the SCI in
 // `layout` (three-level unless said), with the handle `events` file (none unless said),
-// tracing to dir/trace.jsonl. Empty when both ran, else the failing command's output.
+// tracing to dir/trace.jsonl. `models`: the gesture model and the segmenter's pixel model
+// (the shipped ones unless said). Empty when both ran, else the failing command's output.
+struct GestureModels {
+    std::string gestures = ENDOTOWER_SOURCE_DIR "/board/sim/models/gestures.yml";
+    std::string pixels = ENDOTOWER_SOURCE_DIR "/board/sim/models/gesture_tool_likelihood.bin";
+};
 std::string replay_with_gestures(const fs::path& dir, const std::string& scenario,
                                  const std::string& layout = "three_level",
-                                 const std::string& events = "''") {
+                                 const std::string& events = "''",
+                                 const GestureModels& models = {}) {
     const std::string src = ENDOTOWER_SOURCE_DIR;
     auto scene = run_endotower("scene --scenario " + src + "/board/sim/scenarios/sci/" + scenario +
                                " --out " + (dir / "scene").string());
     if (scene.status != 0) return scene.output;
     std::ofstream(dir / "board.yaml")
         << "board: sci_test\nanalysis:\n  stage: none\n  tracker: likelihood\n  tool_model: " << src
-        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << src
-        << "/board/sim/models/gestures.yml\nsci:\n  layout: " << layout << "\n  media: " << src
-        << "/board/sim/sci_media\n";
+        << "/board/sim/models/tool_likelihood.bin\n  gestures:\n    model: " << models.gestures
+        << "\n    tool_model: " << models.pixels << "\nsci:\n  layout: " << layout
+        << "\n  media: " << src << "/board/sim/sci_media\n";
     auto sim =
         run_endotower("sim --board " + (dir / "board.yaml").string() + " --input " +
                       (dir / "scene/frames").string() + " --events " + events + " --out " +
@@ -72,10 +78,21 @@ std::string replay_with_gestures(const fs::path& dir, const std::string& scenari
 }
 
 // replay_with_gestures with the ring menu opened by the handle's button at frame 3.
-std::string replay_on_the_ring_after_the_button(const fs::path& dir, const std::string& scenario) {
+std::string replay_on_the_ring_after_the_button(const fs::path& dir, const std::string& scenario,
+                                                const GestureModels& models = {}) {
     std::ofstream(dir / "events.txt") << "frame 3 press\nframe 4 release\n";
-    return replay_with_gestures(dir, scenario, "ring", (dir / "events.txt").string());
+    return replay_with_gestures(dir, scenario, "ring", (dir / "events.txt").string(), models);
 }
+
+// The models shipped until 2026-11-29: the segmenter on the tracker's pixel model, which
+// reads the pale pink sheen of wet tissue as tool, and the network trained on its masks.
+// With them the cases of the two rules below (a tissue region beside the tools read as a
+// single tool) occur in these scenes; with the shipped pair the tissue regions are
+// there but rarely read as a tool (docs/gestures.md, "The segmenter's own pixel model").
+// Real video can still give such regions, so the rules stay, tested with these models.
+const GestureModels kTrackerPixels{ENDOTOWER_SOURCE_DIR
+                                   "/tests/unit/sci/data/gestures_tracker_pixels.yml",
+                                   ENDOTOWER_SOURCE_DIR "/board/sim/models/tool_likelihood.bin"};
 
 // Every frame of dir/trace.jsonl as a Step.
 std::vector<Step> read_steps(const fs::path& dir) {
@@ -299,7 +316,8 @@ TEST(SciScenario, ACrossHeldStillOpensTheQuadrantMenuAndAgainTurnsTheSciOff) {
 // two-tool gesture holds both tools, so it is the frame's (docs/gestures.md).
 TEST(SciScenario, ACrossBesideAGlintPatchReadAsScissorsOpensTheQuadrantMenu) {
     const fs::path dir = temp_dir("cross_glints");
-    const std::string failed = replay_with_gestures(dir, "cross_beside_glints.yaml", "ring");
+    const std::string failed =
+        replay_with_gestures(dir, "cross_beside_glints.yaml", "ring", "''", kTrackerPixels);
     ASSERT_TRUE(failed.empty()) << failed;
     // The tips come within 3 % of the width of where they rest on frames 22-23 and 93
     // and stop on 25 and 95: the menu and the off 1.0 s later.
@@ -350,7 +368,7 @@ TEST(SciScenario, ACrossWithATenMillimetreGrasperNearTheScopeOpensTheQuadrantMen
 TEST(SciScenario, TheOpenGrasperAtThePointerSelectsBesideTissueReadAsATool) {
     const fs::path dir = temp_dir("beside_tissue");
     const std::string failed =
-        replay_on_the_ring_after_the_button(dir, "grasper_beside_tissue.yaml");
+        replay_on_the_ring_after_the_button(dir, "grasper_beside_tissue.yaml", kTrackerPixels);
     ASSERT_TRUE(failed.empty()) << failed;
     const std::vector<Step> every = read_steps(dir), events = events_of(every);
     ASSERT_EQ(every.size(), 135u);
