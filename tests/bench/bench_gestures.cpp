@@ -148,7 +148,15 @@ int run_frames(int n) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc == 3 && std::string(argv[1]) == "--frames") return run_frames(std::atoi(argv[2]));
+    if (argc >= 2 && std::string(argv[1]) == "--frames") {
+        char* end = nullptr;
+        const long n = argc == 3 ? std::strtol(argv[2], &end, 10) : 0;
+        if (argc != 3 || *end != 0 || n < 1 || n > 1000000) {
+            std::fprintf(stderr, "bench_gestures: --frames needs a whole number in 1..1000000\n");
+            return 2;
+        }
+        return run_frames(static_cast<int>(n));
+    }
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::RunSpecifiedBenchmarks();
