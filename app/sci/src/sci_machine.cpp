@@ -284,6 +284,15 @@ void SciMachine::remember_tools(const SciFrame& f) {
 }
 
 bool SciMachine::cross_held(const SciFrame& f) {
+    // A triangle or double triangle whose open jaws close over the other tool turns into
+    // a cross without the tools parting: a grasp, not a command (docs/sci.md, "A cross
+    // formed by a grasp"). Contact lost for less than part_ms (from the first frame
+    // apart to the next touching) is the segmentation's.
+    if (!f.tools_touching && !apart_) apart_ = true, apart_since_ = f.t_ns;
+    if (apart_ && f.t_ns - apart_since_ >= ms_to_ns(params_.part_ms)) open_crossing_ = false;
+    if (f.tools_touching) apart_ = false;
+    if (f.gesture == SciGesture::kOpenCrossing) open_crossing_ = true;
+
     const double still_px = params_.still_fraction * width_;
     const bool formed =
         f.gesture == SciGesture::kCross && (!cross_holding_ || f.gesture_held_ms < last_held_ms_);
@@ -294,6 +303,7 @@ bool SciMachine::cross_held(const SciFrame& f) {
                          !tips_near(now, n, cross_anchor_, cross_anchors_, still_px);
     if (restart) {
         cross_holding_ = f.gesture == SciGesture::kCross;
+        if (formed) cross_is_grasp_ = open_crossing_;
         cross_anchor_ = now, cross_anchors_ = n;
         // One restarted by a tool's motion holds from now. A cross just formed dates from
         // the gesture's own hold (it may date a few frames back, GestureHold), but only as
@@ -309,7 +319,7 @@ bool SciMachine::cross_held(const SciFrame& f) {
             cross_still_start_ = r.t_ns;
         }
     }
-    return cross_holding_ && f.gesture_held_ms >= params_.cross_hold_ms &&
+    return cross_holding_ && !cross_is_grasp_ && f.gesture_held_ms >= params_.cross_hold_ms &&
            f.t_ns - cross_still_start_ >= ms_to_ns(params_.cross_hold_ms);
 }
 

@@ -17,6 +17,7 @@ SciGesture to_sci_gesture(int label) {
     if (l == "open_grasper") return SciGesture::kOpenGrasper;
     if (l == "open_scissors" || l == "closed_scissors") return SciGesture::kScissors;
     if (l == "cross") return SciGesture::kCross;
+    if (l == "triangle" || l == "double_triangle") return SciGesture::kOpenCrossing;
     return SciGesture::kOther;
 }
 
@@ -95,6 +96,7 @@ void SciStage::process(app::AnalysisContext& ctx) {
         f.gesture_held_ms = g.held_ms;
         f.gesture_fired = g.fired;
         f.gesture_x = g.tip.x, f.gesture_y = g.tip.y;
+        f.tools_touching = g.touching;
     }
     // The cursor is the surest tool.
     if (f.tool_count == 2 && confidence[1] > confidence[0]) std::swap(f.tools[0], f.tools[1]);

@@ -105,10 +105,16 @@ void GestureStage::process(app::AnalysisContext& ctx) {
                      ctx.frame.capture_ns, still_px_);
     // Through a dropout the held gesture stays where it was last seen.
     const bool seen = one && results[which].label == s.label;
-    current_ = {s.label, one ? results[which].confidence : 0.0, s.held_ms, s.fired,
+    bool touching = false;
+    for (std::size_t i = 0; i < n; ++i) touching = touching || blobs_[i].entries >= 2;
+    current_ = {s.label,
+                one ? results[which].confidence : 0.0,
+                s.held_ms,
+                s.fired,
                 seen           ? blobs_[which].tip
                 : s.label >= 0 ? s.where
-                               : Point2{}};
+                               : Point2{},
+                touching};
 
     ctx.trace.begin_object("gesture");
     if (s.label >= 0)

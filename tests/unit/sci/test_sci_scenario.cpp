@@ -219,6 +219,34 @@ TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
     fs::remove_all(dir);
 }
 
+// No command meant (docs/sci.md "A cross formed by a grasp"):
+// board/sim/scenarios/sci/cross_by_grasping.yaml, the pose of surgery_motion seed 52. An
+// open grasper comes over the still scissors (read as a triangle), and closes its jaws
+// over them on frame 34: the gesture stage reads and holds a cross, fired, still for
+// 2.6 s, but it formed out of the triangle while the tools touched, so the SCI stays
+// inactive with no event at all. Without the rule the quadrant menu opens on frame 60.
+TEST(SciScenario, ACrossFormedByJawsClosingOverTheOtherToolOpensNoMenu) {
+    const fs::path dir = temp_dir("grasping");
+    const std::string failed = replay_with_gestures(dir, "cross_by_grasping.yaml");
+    ASSERT_TRUE(failed.empty()) << failed;
+    std::ifstream in(dir / "trace.jsonl");
+    int frames = 0, triangles = 0, cross_fired = 0;
+    for (std::string line; std::getline(in, line); ++frames) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        const nlohmann::json& s = j.at("sci");
+        EXPECT_EQ(text(s.at("state")), "inactive") << "frame " << frames;
+        EXPECT_EQ(text(s.at("event")), "-") << "frame " << frames;
+        const nlohmann::json& g = j.at("gesture");
+        triangles += text(g.at("label")) == "triangle";
+        cross_fired += g.at("fired").get<bool>() && text(g.at("label")) == "cross";
+    }
+    EXPECT_EQ(frames, 100);
+    // The case is there: the triangle held first, then the cross held 1 s.
+    EXPECT_GE(triangles, 5);
+    EXPECT_EQ(cross_fired, 1);
+    fs::remove_all(dir);
+}
+
 // Gesture commands (fig. 3.32, 3.33): board/sim/scenarios/sci/grasper_confirm.yaml, the
 // ring menu opened by the handle's button at frame 3; a grasper comes onto the MRI
 // sector (frames 10-20) and opens its jaws there, held still; from frame 55 its tip loops

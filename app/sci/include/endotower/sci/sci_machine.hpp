@@ -16,7 +16,10 @@
 // A cross is held only while the tracked tools are still, too: each tool's tip within
 // `still_fraction` x width of where it was when the hold began (a tool sliding along its
 // shaft leaves the crossing, and so the gesture's region, unchanged: surgery, not a
-// command; docs/sci.md "False activations").
+// command; docs/sci.md "False activations"). Nor is a cross that forms out of a triangle
+// or double triangle while the tools touch: jaws closing over the other tool (a grasp);
+// a commanded cross is made with closed jaws, the tools coming together. The tools
+// apart for `part_ms` end that crossing (docs/sci.md "A cross formed by a grasp").
 // event() names what happened this frame (docs/sci.md lists them), or is empty.
 // Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
 // hold 1000 ms, confirm window 2000 ms, select grace 200 ms, loop 6 of 8 directions,
@@ -45,7 +48,15 @@ enum class SciState : std::uint8_t {
 };
 std::string_view to_string(SciState s);
 
-enum class SciGesture : std::uint8_t { kNone, kOpenGrasper, kScissors, kCross, kOther };
+// kOpenCrossing: two tools crossing, one or both with open jaws (triangle, double triangle).
+enum class SciGesture : std::uint8_t {
+    kNone,
+    kOpenGrasper,
+    kScissors,
+    kCross,
+    kOpenCrossing,
+    kOther
+};
 
 struct SciTool {
     double x = 0, y = 0;  // tip, px
@@ -61,6 +72,7 @@ struct SciFrame {
     double gesture_held_ms = 0;  // held still this long (GestureHold)
     bool gesture_fired = false;  // the frame the hold reached the gesture stage's hold time
     double gesture_x = 0, gesture_y = 0;  // the gesture's tip, px
+    bool tools_touching = false;          // a region holds two tools (GestureFrame::touching)
     std::span<const hal::ControlEvent> events;
 };
 
@@ -84,6 +96,9 @@ struct SciParams {
     // restarted the dwell (docs/sci.md, "Leaving an item").
     double leave_margin_fraction = 0.02;
     double still_fraction = 0.03;  // of the width: a tool's tip "still" during a cross hold
+    // The tools apart this long end a crossing (a shorter gap is the segmentation losing
+    // the contact for a frame or two; the gesture hold's dropout tolerance).
+    double part_ms = 200;
     double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
     std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)
     Vec3d box_target_mm{20, 10, 90};
@@ -155,6 +170,11 @@ private:
     std::array<std::array<double, 2>, 2> cross_anchor_{};
     int cross_anchors_ = 0;
     bool cross_holding_ = false;
+    // A triangle or double triangle was read and the tools have touched since (apart for
+    // less than part_ms): a cross formed now is a grasp, and so is the one being held.
+    bool open_crossing_ = false, cross_is_grasp_ = false;
+    bool apart_ = true;
+    hal::Nanos apart_since_ = 0;
     hal::Nanos cross_still_start_ = 0;
     // The tools' tips of the last frames (a ring, the newest at recent_next_ - 1): how far
     // back a cross the gesture stage dates back found them where they are.

@@ -90,12 +90,15 @@ struct GestureStageParams {
     double pointer_fraction = 0.1;       // two single-tool calls: the one at the pointer
 };
 
-// One frame's gesture: label -1 = none; tip where the gesture's region is (px).
+// One frame's gesture: label -1 = none; tip where the gesture's region is (px);
+// touching: some region enters the image twice (two tools against each other), whatever
+// it reads as.
 struct GestureFrame {
     int label = -1;
     double confidence = 0, held_ms = 0;
     bool fired = false;
     Point2 tip;
+    bool touching = false;
 };
 
 class GestureStage final : public app::AnalysisStage {
