@@ -19,7 +19,8 @@ struct GestureSegmenter::Work {
     ContourTracer tracer;            // the features' contours (window <= the analysis size)
     std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths
     cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels, window;
-    std::vector<std::uint32_t> dist;  // chamfer distances in one region's box
+    std::vector<std::uint16_t> cells;  // one row's ToolLikelihood cells
+    std::vector<std::uint32_t> dist;   // chamfer distances in one region's box
     std::vector<double> reach;        // per region pixel, its distance from the entry
     cv::Mat large_element, small_element;
     struct Px {
@@ -88,6 +89,7 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     w.labels.create(sh, sw, CV_32S);
     w.ops.configure(sw, sh);
     w.tracer.reserve(sw, sh);
+    w.cells.resize(static_cast<std::size_t>(sw));
     w.dist.resize(static_cast<std::size_t>(sw) * sh);
     w.reach.resize(static_cast<std::size_t>(sw) * sh);
     const int big =
@@ -144,13 +146,14 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         // The tool probability, only where lit: the 5x5 Gaussian of a pixel inside the
         // eroded field of view reads only lit pixels (the ellipse covers its 5x5), and
         // every other pixel is cleared by the AND below, so the mask is the same.
+        // The cells a row at a time, vectorised; the table lookups one by one.
         const std::uint8_t* table = model_->table().data();
+        const std::uint16_t* cell = w.cells.data();
         for (int y = 0; y < H; ++y) {
-            const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
+            ToolLikelihood::cells(w.small.ptr<std::uint8_t>(y), w.cells.data(), W);
             const std::uint8_t* l = w.lit.ptr<std::uint8_t>(y);
             std::uint8_t* q = w.blurred.ptr<std::uint8_t>(y);
-            for (int x = 0; x < W; ++x, p += 3)
-                q[x] = l[x] ? table[ToolLikelihood::cell(p[0], p[1], p[2])] : 0;
+            for (int x = 0; x < W; ++x) q[x] = l[x] ? table[cell[x]] : 0;
         }
         w.ops.smooth_at_least(plane(w.blurred), params_.threshold, plane(w.eroded),
                               plane(w.binary));

@@ -253,6 +253,7 @@ Segment refine_edge(const cv::Mat& img, const Segment& e, double begin, double e
 struct LikelihoodToolTracker::Work {
     double scale = 1.0;
     cv::Mat small, prob, raw, gray, lit, eroded, binary, labels;
+    std::vector<std::uint16_t> cells;  // one row's ToolLikelihood cells
     AreaMean reduce;                 // INTER_AREA, no allocation (factor <= 15: else cv::resize)
     MaskOps ops;                     // the image operations, OpenCV's bytes, no allocation
     std::vector<std::uint32_t> rim;  // distance to the unlit surround, 16.16 fixed point
@@ -282,6 +283,7 @@ void LikelihoodToolTracker::configure(const hal::FrameFormat& format) {
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
     w.prob.create(sh, sw, CV_8U);
+    w.cells.resize(static_cast<std::size_t>(sw));
     w.raw.create(sh, sw, CV_8U);
     w.lit.create(sh, sw, CV_8U);
     w.eroded.create(sh, sw, CV_8U);
@@ -327,13 +329,16 @@ std::size_t LikelihoodToolTracker::track(const hal::Frame& frame,
     const int W = w.small.cols, H = w.small.rows;
 
     // Probability per pixel; brightness histogram for the field of view.
+    // The cells a row at a time, vectorised (ToolLikelihood::cells); the lookups one by one.
     std::array<int, 256> hist{};
+    const std::uint8_t* table = model_.table().data();
     for (int y = 0; y < H; ++y) {
         const std::uint8_t* p = w.small.ptr<std::uint8_t>(y);
         std::uint8_t* q = w.prob.ptr<std::uint8_t>(y);
         std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
+        ToolLikelihood::cells(p, w.cells.data(), W);
         for (int x = 0; x < W; ++x, p += 3) {
-            q[x] = model_.probability(p[0], p[1], p[2]);
+            q[x] = table[w.cells[static_cast<std::size_t>(x)]];
             g[x] = static_cast<std::uint8_t>((p[0] + p[1] + p[2]) / 3);
             ++hist[g[x]];
         }

@@ -8,6 +8,8 @@
 #include <sstream>
 #include <vector>
 
+#include "wide_vectors.hpp"
+
 namespace endotower::vision {
 
 namespace {
@@ -22,6 +24,24 @@ std::uint64_t fnv1a(const std::uint8_t* p, std::size_t n) {
 }
 
 }  // namespace
+
+// A quotient below 64 with a divisor below 766 is within 64 x 2^-24 of the true one in
+// single precision, closer than the 1/765 that separates a non-integer one from the next
+// integer: truncating it gives the integer division (an integer quotient is exact).
+// b = g = r = 0 gives cell 0 with the divisor 1, as cell() does.
+ENDOTOWER_WIDE_VECTORS void ToolLikelihood::cells(const std::uint8_t* __restrict bgr,
+                                                  std::uint16_t* __restrict out, int n) {
+    // Indexed loads and no std::min/max: the form GCC vectorises (8 pixels a step).
+    for (int x = 0; x < n; ++x) {
+        const int b = bgr[3 * x], g = bgr[3 * x + 1], r = bgr[3 * x + 2], s = b + g + r;
+        const float d = static_cast<float>(s | (s == 0));
+        const int cb = static_cast<int>(static_cast<float>(b * (kChroma - 1) + (s >> 1)) / d);
+        const int cg = static_cast<int>(static_cast<float>(g * (kChroma - 1) + (s >> 1)) / d);
+        const int lv = static_cast<int>(static_cast<float>(s * kLevels) / 766.0f);
+        out[x] = static_cast<std::uint16_t>((cb * kChroma + cg) * kLevels +
+                                            (lv < kLevels - 1 ? lv : kLevels - 1));
+    }
+}
 
 void ToolLikelihood::add(const hal::Frame& f, const std::uint8_t* labels, double weight,
                          const std::array<double, 3>& gains) {

@@ -52,6 +52,33 @@ TEST(ToolLikelihood, CellEqualsTheDivisionsForEveryColour) {
     EXPECT_EQ(mismatches, 0) << "first at colour 0x" << std::hex << first;
 }
 
+TEST(ToolLikelihood, RowCellsEqualCellForEveryColour) {
+    // cells() divides in single precision, vectorised; cell() is the reference. One row
+    // of 4096 pixels at a time, every colour once.
+    std::vector<std::uint8_t> row(3 * 4096);
+    std::vector<std::uint16_t> got(4096);
+    long mismatches = 0;
+    int first = -1;
+    for (int c0 = 0; c0 < (1 << 24); c0 += 4096) {
+        for (int i = 0; i < 4096; ++i) {
+            const int c = c0 + i;
+            row[3 * i] = static_cast<std::uint8_t>(c & 255);
+            row[3 * i + 1] = static_cast<std::uint8_t>((c >> 8) & 255);
+            row[3 * i + 2] = static_cast<std::uint8_t>(c >> 16);
+        }
+        ToolLikelihood::cells(row.data(), got.data(), 4096);
+        for (int i = 0; i < 4096; ++i)
+            if (got[i] != ToolLikelihood::cell(row[3 * i], row[3 * i + 1], row[3 * i + 2]) &&
+                mismatches++ == 0)
+                first = c0 + i;
+    }
+    EXPECT_EQ(mismatches, 0) << "first at colour 0x" << std::hex << first;
+    // A row whose length is no multiple of the vector width: the tail too.
+    ToolLikelihood::cells(row.data(), got.data(), 13);
+    for (int i = 0; i < 13; ++i)
+        EXPECT_EQ(got[i], ToolLikelihood::cell(row[3 * i], row[3 * i + 1], row[3 * i + 2]));
+}
+
 // Grey tool pixels left, red tissue right.
 ToolLikelihood trained_grey_vs_red() {
     cv::Mat img(40, 80, CV_8UC3, cv::Scalar(40, 40, 200));
