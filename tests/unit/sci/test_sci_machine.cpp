@@ -523,6 +523,25 @@ TEST(SciMachine, ACrossDatedBackWaitsForTheToolsLastMotion) {
     EXPECT_EQ(std::string(to_string(m.menu().id)), "quadrant");
 }
 
+// One frame of two tools whose tips are at (300 + dx, 260) and (340 + dx, 300), the
+// gesture's between them; the machine's event.
+std::string two_tools(SciMachine& m, hal::Nanos t, SciGesture g, double held_ms, bool touching,
+                      double dx = 0) {
+    SciFrame f;
+    f.t_ns = t;
+    f.tool_count = 2;
+    f.tools[0].x = 300 + dx, f.tools[0].y = 260;
+    f.tools[1].x = 340 + dx, f.tools[1].y = 300;
+    f.gesture = g, f.gesture_held_ms = held_ms, f.tools_touching = touching;
+    f.gesture_x = 320 + dx, f.gesture_y = 250;
+    m.step(f);
+    return std::string(m.event());
+}
+
+double ms_since(hal::Nanos t, hal::Nanos since) {
+    return static_cast<double>(t - since) / 1e6;
+}
+
 // A triangle (the grasper's jaws open across the scissors) whose jaws close over the
 // other tool becomes a cross without the tools parting: a grasp, not a command, however
 // long it is held still (surgery_motion seed 52). Contact lost for 160 ms (from the first
@@ -532,35 +551,24 @@ TEST(SciMachine, ACrossDatedBackWaitsForTheToolsLastMotion) {
 TEST(SciMachine, ACrossFormedByJawsClosingOverTheOtherToolIsAGrasp) {
     SciMachine m;
     m.configure(kW, kH);
-    auto step = [&](hal::Nanos t, SciGesture g, double held_ms, bool touching) {
-        SciFrame f;
-        f.t_ns = t;
-        f.tool_count = 2;
-        f.tools[0].x = 300, f.tools[0].y = 260;
-        f.tools[1].x = 340, f.tools[1].y = 300;
-        f.gesture = g, f.gesture_held_ms = held_ms, f.tools_touching = touching;
-        f.gesture_x = 320, f.gesture_y = 250;
-        m.step(f);
-        return std::string(m.event());
-    };
-    const double ms = 1e-6;
     hal::Nanos t = 0;
     for (; t < 800 * kMs; t += 40 * kMs)
-        EXPECT_EQ(step(t, SciGesture::kOpenCrossing, static_cast<double>(t) * ms, true), "");
+        EXPECT_EQ(two_tools(m, t, SciGesture::kOpenCrossing, ms_since(t, 0), true), "");
     for (; t < 960 * kMs; t += 40 * kMs)  // 800..920: contact lost, touching again at 960
-        EXPECT_EQ(step(t, SciGesture::kNone, 0, false), "");
+        EXPECT_EQ(two_tools(m, t, SciGesture::kNone, 0, false), "");
     // The jaws close: a cross, its hold from 960 ms, still to 3.0 s.
     for (; t <= 3000 * kMs; t += 40 * kMs) {
-        ASSERT_EQ(step(t, SciGesture::kCross, static_cast<double>(t - 960 * kMs) * ms, true), "")
+        ASSERT_EQ(two_tools(m, t, SciGesture::kCross, ms_since(t, 960 * kMs), true), "")
             << "at " << t / kMs << " ms";
         ASSERT_EQ(m.state(), SciState::kInactive);
     }
     // The tools part for 200 ms, then cross again, closed, at 3.24 s.
-    for (; t < 3240 * kMs; t += 40 * kMs) EXPECT_EQ(step(t, SciGesture::kNone, 0, false), "");
+    for (; t < 3240 * kMs; t += 40 * kMs)
+        EXPECT_EQ(two_tools(m, t, SciGesture::kNone, 0, false), "");
     const hal::Nanos formed = t;
     for (; t < formed + 1000 * kMs; t += 40 * kMs)
-        ASSERT_EQ(step(t, SciGesture::kCross, static_cast<double>(t - formed) * ms, true), "");
-    EXPECT_EQ(step(t, SciGesture::kCross, 1000, true), "quadrant");
+        ASSERT_EQ(two_tools(m, t, SciGesture::kCross, ms_since(t, formed), true), "");
+    EXPECT_EQ(two_tools(m, t, SciGesture::kCross, 1000, true), "quadrant");
     EXPECT_EQ(std::string(to_string(m.menu().id)), "quadrant");
 }
 
@@ -569,24 +577,13 @@ TEST(SciMachine, ACrossFormedByJawsClosingOverTheOtherToolIsAGrasp) {
 TEST(SciMachine, AGraspMovedWhileHeldIsStillNoCommand) {
     SciMachine m;
     m.configure(kW, kH);
-    auto step = [&](hal::Nanos t, double dx, SciGesture g, double held_ms) {
-        SciFrame f;
-        f.t_ns = t;
-        f.tool_count = 2;
-        f.tools[0].x = 300 + dx, f.tools[0].y = 260;
-        f.tools[1].x = 340 + dx, f.tools[1].y = 300;
-        f.gesture = g, f.gesture_held_ms = held_ms, f.tools_touching = true;
-        f.gesture_x = 320 + dx, f.gesture_y = 250;
-        m.step(f);
-        return std::string(m.event());
-    };
     hal::Nanos t = 0;
-    for (; t < 400 * kMs; t += 40 * kMs) step(t, 0, SciGesture::kOpenCrossing, 0);
+    for (; t < 400 * kMs; t += 40 * kMs) two_tools(m, t, SciGesture::kOpenCrossing, 0, true);
     for (const hal::Nanos formed = t; t < 1600 * kMs; t += 40 * kMs)
-        ASSERT_EQ(step(t, 0, SciGesture::kCross, static_cast<double>(t - formed) / 1e6), "");
+        ASSERT_EQ(two_tools(m, t, SciGesture::kCross, ms_since(t, formed), true), "");
     for (const hal::Nanos moved = t; t <= moved + 3000 * kMs; t += 40 * kMs) {
-        const double dx = std::min(30.0, static_cast<double>(t - moved) / (40 * kMs) * 10);
-        ASSERT_EQ(step(t, dx, SciGesture::kCross, static_cast<double>(t - moved) / 1e6), "")
+        const double dx = std::min(30.0, ms_since(t, moved) / 4);  // 10 px a frame
+        ASSERT_EQ(two_tools(m, t, SciGesture::kCross, ms_since(t, moved), true, dx), "")
             << "at " << t / kMs << " ms";
     }
     EXPECT_EQ(m.state(), SciState::kInactive);
