@@ -286,11 +286,12 @@ void SciMachine::remember_tools(const SciFrame& f) {
 bool SciMachine::cross_held(const SciFrame& f) {
     // A triangle or double triangle whose open jaws close over the other tool turns into
     // a cross without the tools parting: a grasp, not a command (docs/sci.md, "A cross
-    // formed by a grasp"). Contact lost for less than part_ms (from the first frame
-    // apart to the next touching) is the segmentation's.
-    if (!f.tools_touching && !apart_) apart_ = true, apart_since_ = f.t_ns;
-    if (apart_ && f.t_ns - apart_since_ >= ms_to_ns(params_.part_ms)) open_crossing_ = false;
-    if (f.tools_touching) apart_ = false;
+    // formed by a grasp"). Contact lost is the segmentation's until a frame comes more
+    // than part_ms after the last touching one (GestureHold's dropout measure).
+    if (f.tools_touching)
+        last_touch_ = f.t_ns;
+    else if (f.t_ns - last_touch_ > ms_to_ns(params_.part_ms))
+        open_crossing_ = false;
     if (f.gesture == SciGesture::kOpenCrossing) open_crossing_ = true;
 
     const double still_px = params_.still_fraction * width_;

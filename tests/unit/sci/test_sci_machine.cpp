@@ -544,26 +544,26 @@ double ms_since(hal::Nanos t, hal::Nanos since) {
 
 // A triangle (the grasper's jaws open across the scissors) whose jaws close over the
 // other tool becomes a cross without the tools parting: a grasp, not a command, however
-// long it is held still (surgery_motion seed 52). Contact lost for 160 ms (from the first
-// frame apart to the next touching) is the segmentation's; apart for 200 ms (part_ms) the
-// tools have parted, and a cross formed then is a command: the quadrant menu exactly
-// 1.0 s later.
+// long it is held still (surgery_motion seed 52). Contact lost for five frames (the last
+// of them 200 ms after the last touching one, part_ms) is the segmentation's; a frame
+// 240 ms after it, and the tools have parted: a cross formed then is a command, the
+// quadrant menu exactly 1.0 s later.
 TEST(SciMachine, ACrossFormedByJawsClosingOverTheOtherToolIsAGrasp) {
     SciMachine m;
     m.configure(kW, kH);
     hal::Nanos t = 0;
     for (; t < 800 * kMs; t += 40 * kMs)
         EXPECT_EQ(two_tools(m, t, SciGesture::kOpenCrossing, ms_since(t, 0), true), "");
-    for (; t < 960 * kMs; t += 40 * kMs)  // 800..920: contact lost, touching again at 960
+    for (; t < 1000 * kMs; t += 40 * kMs)  // 800..960: contact lost, 960 = 760 + 200
         EXPECT_EQ(two_tools(m, t, SciGesture::kNone, 0, false), "");
-    // The jaws close: a cross, its hold from 960 ms, still to 3.0 s.
+    // The jaws close: a cross, its hold from 1000 ms, still to 3.0 s.
     for (; t <= 3000 * kMs; t += 40 * kMs) {
-        ASSERT_EQ(two_tools(m, t, SciGesture::kCross, ms_since(t, 960 * kMs), true), "")
+        ASSERT_EQ(two_tools(m, t, SciGesture::kCross, ms_since(t, 1000 * kMs), true), "")
             << "at " << t / kMs << " ms";
         ASSERT_EQ(m.state(), SciState::kInactive);
     }
-    // The tools part for 200 ms, then cross again, closed, at 3.24 s.
-    for (; t < 3240 * kMs; t += 40 * kMs)
+    // The tools part (3040..3240, the last 240 ms after 3000), then cross again, closed.
+    for (; t < 3280 * kMs; t += 40 * kMs)
         EXPECT_EQ(two_tools(m, t, SciGesture::kNone, 0, false), "");
     const hal::Nanos formed = t;
     for (; t < formed + 1000 * kMs; t += 40 * kMs)

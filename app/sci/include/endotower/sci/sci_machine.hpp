@@ -96,8 +96,9 @@ struct SciParams {
     // restarted the dwell (docs/sci.md, "Leaving an item").
     double leave_margin_fraction = 0.02;
     double still_fraction = 0.03;  // of the width: a tool's tip "still" during a cross hold
-    // The tools apart this long end a crossing (a shorter gap is the segmentation losing
-    // the contact for a frame or two; the gesture hold's dropout tolerance).
+    // A frame this long after the tools last touched ends a crossing (a shorter gap is the
+    // segmentation losing the contact for a few frames; the gesture hold's dropout
+    // tolerance, measured as GestureHold does).
     double part_ms = 200;
     double activation_height = 0.20, activation_width = 0.40;  // fractions of the frame
     std::array<int, kModalityCount> image_counts{};  // images per modality (ct, xray, mri)
@@ -170,11 +171,11 @@ private:
     std::array<std::array<double, 2>, 2> cross_anchor_{};
     int cross_anchors_ = 0;
     bool cross_holding_ = false;
-    // A triangle or double triangle was read and the tools have touched since (apart for
-    // less than part_ms): a cross formed now is a grasp, and so is the one being held.
+    // A triangle or double triangle was read and the tools have touched since (no frame
+    // more than part_ms after a touching one): a cross formed now is a grasp, and so is
+    // the one being held.
     bool open_crossing_ = false, cross_is_grasp_ = false;
-    bool apart_ = true;
-    hal::Nanos apart_since_ = 0;
+    hal::Nanos last_touch_ = 0;
     hal::Nanos cross_still_start_ = 0;
     // The tools' tips of the last frames (a ring, the newest at recent_next_ - 1): how far
     // back a cross the gesture stage dates back found them where they are.
