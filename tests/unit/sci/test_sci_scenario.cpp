@@ -194,6 +194,21 @@ TEST(SciScenario, ScissorsHeldInTheActivationAreaActivateAfterThreeSeconds) {
     fs::remove_all(dir);
 }
 
+// Every frame of dir/trace.jsonl has the SCI inactive with no event (no command meant);
+// returns each frame's "gesture".
+std::vector<nlohmann::json> expect_no_sci_event(const fs::path& dir) {
+    std::vector<nlohmann::json> gestures;
+    std::ifstream in(dir / "trace.jsonl");
+    for (std::string line; std::getline(in, line);) {
+        const nlohmann::json j = nlohmann::json::parse(line);
+        const nlohmann::json& s = j.at("sci");
+        EXPECT_EQ(text(s.at("state")), "inactive") << "frame " << gestures.size();
+        EXPECT_EQ(text(s.at("event")), "-") << "frame " << gestures.size();
+        gestures.push_back(j.at("gesture"));
+    }
+    return gestures;
+}
+
 // No gesture meant (docs/gestures.md "One arm"): board/sim/scenarios/sci/tools_resting.yaml,
 // the 10 mm grasper resting its closed tip on the scissors' closed jaws, both still for
 // 2.4 s (the pose of surgery_motion seed 39, where the SCI opened the quadrant menu). Its
@@ -204,18 +219,12 @@ TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
     const fs::path dir = temp_dir("resting");
     const std::string failed = replay_with_gestures(dir, "tools_resting.yaml");
     ASSERT_TRUE(failed.empty()) << failed;
-    std::ifstream in(dir / "trace.jsonl");
-    int frames = 0;
-    for (std::string line; std::getline(in, line); ++frames) {
-        const nlohmann::json j = nlohmann::json::parse(line);
-        const nlohmann::json& s = j.at("sci");
-        EXPECT_EQ(text(s.at("state")), "inactive") << "frame " << frames;
-        EXPECT_EQ(text(s.at("event")), "-") << "frame " << frames;
-        const nlohmann::json& g = j.at("gesture");
-        EXPECT_FALSE(g.at("fired").get<bool>() && text(g.at("label")) == "cross")
-            << "frame " << frames;
-    }
-    EXPECT_EQ(frames, 60);
+    const std::vector<nlohmann::json> gestures = expect_no_sci_event(dir);
+    for (std::size_t f = 0; f < gestures.size(); ++f)
+        EXPECT_FALSE(gestures[f].at("fired").get<bool>() &&
+                     text(gestures[f].at("label")) == "cross")
+            << "frame " << f;
+    EXPECT_EQ(gestures.size(), 60u);
     fs::remove_all(dir);
 }
 
@@ -229,18 +238,13 @@ TEST(SciScenario, ACrossFormedByJawsClosingOverTheOtherToolOpensNoMenu) {
     const fs::path dir = temp_dir("grasping");
     const std::string failed = replay_with_gestures(dir, "cross_by_grasping.yaml");
     ASSERT_TRUE(failed.empty()) << failed;
-    std::ifstream in(dir / "trace.jsonl");
-    int frames = 0, triangles = 0, cross_fired = 0;
-    for (std::string line; std::getline(in, line); ++frames) {
-        const nlohmann::json j = nlohmann::json::parse(line);
-        const nlohmann::json& s = j.at("sci");
-        EXPECT_EQ(text(s.at("state")), "inactive") << "frame " << frames;
-        EXPECT_EQ(text(s.at("event")), "-") << "frame " << frames;
-        const nlohmann::json& g = j.at("gesture");
+    const std::vector<nlohmann::json> gestures = expect_no_sci_event(dir);
+    int triangles = 0, cross_fired = 0;
+    for (const nlohmann::json& g : gestures) {
         triangles += text(g.at("label")) == "triangle";
         cross_fired += g.at("fired").get<bool>() && text(g.at("label")) == "cross";
     }
-    EXPECT_EQ(frames, 100);
+    EXPECT_EQ(gestures.size(), 100u);
     // The case is there: the triangle held first, then the cross held 1 s.
     EXPECT_GE(triangles, 5);
     EXPECT_EQ(cross_fired, 1);
