@@ -18,8 +18,9 @@
 // shaft leaves the crossing, and so the gesture's region, unchanged: surgery, not a
 // command; docs/sci.md "False activations"). Nor is a cross that forms out of a triangle
 // or double triangle while the tools touch: jaws closing over the other tool (a grasp);
-// a commanded cross is made with closed jaws, the tools coming together. The tools
-// apart for `part_ms` end that crossing (docs/sci.md "A cross formed by a grasp").
+// a commanded cross is made with closed jaws, the tools coming together. A frame more
+// than `part_ms` after the tools last touched ends that crossing (docs/sci.md "A cross
+// formed by a grasp").
 // event() names what happened this frame (docs/sci.md lists them), or is empty.
 // Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
 // hold 1000 ms, confirm window 2000 ms, select grace 200 ms, loop 6 of 8 directions,
