@@ -9,7 +9,7 @@
 # random single-tool poses; "Profile"), rendered over four tissues (seeds 9006-9009;
 # "More tissues"); with the profile features a second stage then
 # trains the two-tool network alone, by RPROP, on crossings from every side
-# (varied_double_*.yaml; "Crossings from every side"). The fig322/fig323/fig312 suites
+# (varied_double_*.yaml; "Crossings from every side"), over two tissues (seeds 9006, 9007). The fig322/fig323/fig312 suites
 # at their own seeds and test_* are the held-out test sets (docs/gestures.md).
 # Deterministic: same bytes every run.
 # Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended|topology|profile]
@@ -84,6 +84,12 @@ case " $* " in
     for f in "$root"/board/sim/scenarios/gestures/varied_double_*.yaml "$root"/board/sim/scenarios/gestures/more_double_*.yaml; do
       s=$(basename "$f" .yaml)
       [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+      two+=(--two-tool-scene "$work/$s")
+    done
+    # The same crossings over a second tissue (seed 9007; docs/gestures.md, "More tissues").
+    for f in "$root"/board/sim/scenarios/gestures/more_double_*.yaml "$root"/board/sim/scenarios/gestures/varied_double_*.yaml; do
+      s=s9007_$(basename "$f" .yaml)
+      [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9007 --size 640x480 --out "$work/$s" >/dev/null
       two+=(--two-tool-scene "$work/$s")
     done
     two+=(--two-tool-scene "$work/single_activation_scissors" --two-tool-scene "$work/single_activation_grasper")
