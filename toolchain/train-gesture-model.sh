@@ -9,8 +9,9 @@
 # random single-tool poses; "Profile"), rendered over four tissues (seeds 9006-9009;
 # "More tissues"); with the profile features a second stage then
 # trains the two-tool network alone, by RPROP, on crossings from every side
-# (varied_double_*.yaml; "Crossings from every side"), over two tissues (seeds 9006, 9007). The fig322/fig323/fig312 suites
-# at their own seeds and test_* are the held-out test sets (docs/gestures.md).
+# (varied_double_*.yaml; "Crossings from every side"), over two tissues (seeds 9006
+# and 9007). The fig322/fig323/fig312 suites at their own seeds and test_* are the
+# held-out test sets (docs/gestures.md).
 # Deterministic: same bytes every run.
 # Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended|topology|profile]
 #        [--segmentation likelihood|morphology] [--test DIR]...  (default: the shipped model)
