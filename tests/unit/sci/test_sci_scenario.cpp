@@ -94,6 +94,15 @@ const GestureModels kTrackerPixels{ENDOTOWER_SOURCE_DIR
                                    "/tests/unit/sci/data/gestures_tracker_pixels.yml",
                                    ENDOTOWER_SOURCE_DIR "/board/sim/models/tool_likelihood.bin"};
 
+// The gesture model shipped until 2026-11-29 (late night), trained over one tissue, with
+// the shipped pixel model. It reads the grasp of cross_by_grasping.yaml as a triangle,
+// then a cross held 1 s, the case of the grasp rule; with the shipped model, trained over
+// more tissues, no cross fires there (docs/gestures.md, "More tissues"). A real grasp can
+// still be read so, so the rule stays, tested with this model.
+const GestureModels kOneTissue{ENDOTOWER_SOURCE_DIR "/tests/unit/sci/data/gestures_one_tissue.yml",
+                               ENDOTOWER_SOURCE_DIR
+                               "/board/sim/models/gesture_tool_likelihood.bin"};
+
 // Every frame of dir/trace.jsonl as a Step.
 std::vector<Step> read_steps(const fs::path& dir) {
     std::vector<Step> every;
@@ -234,9 +243,11 @@ TEST(SciScenario, ToolsRestingAgainstEachOtherOpenNoMenu) {
 // over them on frame 34: the gesture stage reads and holds a cross, fired, still for
 // 2.6 s, but it formed out of the triangle while the tools touched, so the SCI stays
 // inactive with no event at all. Without the rule the quadrant menu opens on frame 60.
+// Read with the one-tissue model (kOneTissue), which holds that cross.
 TEST(SciScenario, ACrossFormedByJawsClosingOverTheOtherToolOpensNoMenu) {
     const fs::path dir = temp_dir("grasping");
-    const std::string failed = replay_with_gestures(dir, "cross_by_grasping.yaml");
+    const std::string failed =
+        replay_with_gestures(dir, "cross_by_grasping.yaml", "three_level", "''", kOneTissue);
     ASSERT_TRUE(failed.empty()) << failed;
     const std::vector<nlohmann::json> gestures = expect_no_sci_event(dir);
     int triangles = 0, cross_fired = 0;
