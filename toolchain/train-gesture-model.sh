@@ -28,10 +28,14 @@ bin=$root/build/release/firmware/endotower
 [ -x "$bin" ] || "$root/toolchain/build.sh" release
 work=$root/build/gesture-train
 mkdir -p "$work"
+# Renders scenario F at SEED into $work/NAME unless it is there already.
+render() {
+  [ -f "$work/$3/truth.jsonl" ] || "$bin" scene --scenario "$1" --seed "$2" --size 640x480 --out "$work/$3" >/dev/null
+}
 args=()
 for f in "$root"/board/sim/scenarios/gestures/train_*.yaml; do
   s=$(basename "$f" .yaml)
-  [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+  render "$f" 9006 "$s"
   args+=(--scene "$work/$s")
 done
 case " $* " in
@@ -40,14 +44,14 @@ case " $* " in
     args+=(--networks two)
     for f in "$root"/board/sim/scenarios/gestures/single_*.yaml; do
       s=$(basename "$f" .yaml)
-      [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+      render "$f" 9006 "$s"
       args+=(--single-tool-scene "$work/$s")
     done
     case " $* " in
       *" profile "*)
         for f in "$root"/board/sim/scenarios/gestures/more_single_*.yaml; do
           s=$(basename "$f" .yaml)
-          [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+          render "$f" 9006 "$s"
           args+=(--single-tool-scene "$work/$s")
         done
         # The same poses over three more tissues (the scene seed draws the tissue):
@@ -56,7 +60,7 @@ case " $* " in
         for seed in 9007 9008 9009; do
           for f in "$root"/board/sim/scenarios/gestures/more_single_*.yaml; do
             s=s${seed}_$(basename "$f" .yaml)
-            [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed "$seed" --size 640x480 --out "$work/$s" >/dev/null
+            render "$f" "$seed" "$s"
             args+=(--single-tool-scene "$work/$s")
           done
         done
@@ -84,13 +88,13 @@ case " $* " in
     two=()
     for f in "$root"/board/sim/scenarios/gestures/varied_double_*.yaml "$root"/board/sim/scenarios/gestures/more_double_*.yaml; do
       s=$(basename "$f" .yaml)
-      [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9006 --size 640x480 --out "$work/$s" >/dev/null
+      render "$f" 9006 "$s"
       two+=(--two-tool-scene "$work/$s")
     done
     # The same crossings over a second tissue (seed 9007; docs/gestures.md, "More tissues").
     for f in "$root"/board/sim/scenarios/gestures/more_double_*.yaml "$root"/board/sim/scenarios/gestures/varied_double_*.yaml; do
       s=s9007_$(basename "$f" .yaml)
-      [ -f "$work/$s/truth.jsonl" ] || "$bin" scene --scenario "$f" --seed 9007 --size 640x480 --out "$work/$s" >/dev/null
+      render "$f" 9007 "$s"
       two+=(--two-tool-scene "$work/$s")
     done
     two+=(--two-tool-scene "$work/single_activation_scissors" --two-tool-scene "$work/single_activation_grasper")
