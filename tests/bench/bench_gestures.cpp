@@ -3,6 +3,9 @@
 // the scene simulator), with the shipped models; median and p99 per frame, heap
 // allocations per frame (operator new, and the C allocator, which OpenCV's buffers
 // come from; every thread), CPU time of the whole process (OpenCV's worker threads too).
+// Arg `threads`: 2 (the shipped segmenter: a helper thread takes half of the per-pixel
+// passes and shares the regions) or 1 (all on the calling thread); compare them
+// side by side with --benchmark_enable_random_interleaving=true (docs/performance.md).
 // ENDOTOWER_GESTURE_MODEL=FILE benchmarks another gesture model (e.g. a profile one).
 // `--frames N` runs N frames without the benchmark and prints a checksum (run_frames).
 #include <benchmark/benchmark.h>
@@ -33,7 +36,7 @@ struct GestureFrames {
     std::unique_ptr<vision::GestureSegmenter> segmenter;
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
 
-    bool init(std::string& error) {
+    bool init(std::string& error, int threads = 2) {
         const std::string root = ENDOTOWER_SOURCE_DIR;
         scene::Scenario scenario;
         const char* model = std::getenv("ENDOTOWER_GESTURE_MODEL");
@@ -54,6 +57,7 @@ struct GestureFrames {
         vision::GestureSegmenterParams p;
         p.method = classifier.segmentation();
         p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
+        p.threads = threads;
         segmenter = std::make_unique<vision::GestureSegmenter>(&tool_model, p);
         segmenter->configure(fmt);
         return true;
@@ -69,7 +73,7 @@ struct GestureFrames {
 void BM_Gestures1080pTwoTools(benchmark::State& state) {
     std::string error;
     GestureFrames g;
-    if (!g.init(error)) {
+    if (!g.init(error, static_cast<int>(state.range(0)))) {
         state.SkipWithError(error.c_str());
         return;
     }
@@ -101,6 +105,9 @@ void BM_Gestures1080pTwoTools(benchmark::State& state) {
     state.counters["tools_per_frame"] = static_cast<double>(found) / count;
 }
 BENCHMARK(BM_Gestures1080pTwoTools)
+    ->ArgName("threads")
+    ->Arg(2)
+    ->Arg(1)
     ->Unit(benchmark::kMillisecond)
     ->MinTime(3.0)
     ->MeasureProcessCPUTime()

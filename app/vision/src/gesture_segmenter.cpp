@@ -1,12 +1,14 @@
 #include "endotower/vision/gesture_segmenter.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
+#include "helper_thread.hpp"
 #include "reduce_frame.hpp"
 #include "wide_vectors.hpp"
 
@@ -15,22 +17,67 @@ namespace endotower::vision {
 struct GestureSegmenter::Work {
     double scale = 1.0;
     AreaMean reduce;  // INTER_AREA, no allocation (factor <= 15: else cv::resize)
+    // The per-pixel passes over the frame in bands of rows, the second on the helper
+    // (`threads` = 2): the reduction where it is a block mean (each band's BlockMean
+    // reads its own input rows: the same bytes), the grey values and their histograms,
+    // and every pixel's tool probability (into `blurred`; cleared outside the lit field
+    // once that is known).
+    struct Band {
+        int y0 = 0, y1 = 0;
+        BlockMean reduce;
+        std::vector<std::uint16_t> cells;  // one row's ToolLikelihood cells
+        std::array<std::array<int, 256>, 4> hists{};
+    };
+    std::array<Band, 2> bands;
+    int band_count = 1;
+    bool band_reduce = false;                      // this frame's reduction is the bands'
+    const hal::Frame* frame = nullptr;             // the frame the bands reduce
+    const std::uint8_t* table = nullptr;           // the tool probability; null: not needed
+    std::unique_ptr<detail::HelperThread> helper;  // band 1, the second region
+    void run_band(Band& b);
     MaskOps ops;
-    ContourTracer tracer;            // the features' contours (window <= the analysis size)
     std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths
-    cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels, window;
-    std::vector<std::uint16_t> cells;  // one row's ToolLikelihood cells
-    std::vector<std::uint32_t> dist;   // chamfer distances in one region's box
-    std::vector<double> reach;        // per region pixel, its distance from the entry
+    cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels;
     cv::Mat large_element, small_element;
     struct Px {
         int x, y;
     };
-    std::vector<Px> pixels, entries;
     struct Region {
         int label, area;
     };
     std::vector<Region> regions;
+    // One region's measurement: its tip, window, arms and features (two: with the
+    // helper, the caller and it each take the next region in size order when free).
+    struct RegionScratch {
+        int label = 0;
+        MaskOps distances;                // chamfer() alone
+        ContourTracer tracer;             // the features' contours (window <= the analysis size)
+        std::vector<std::uint32_t> dist;  // chamfer distances in the region's box
+        std::vector<double> reach;        // per region pixel, its distance from the entry
+        std::vector<Px> pixels, entries;
+        cv::Mat window;
+        GestureBlob blob;
+    };
+    std::array<RegionScratch, 2> scratch;
+    // The regions handed out (the next one's index) and the blobs found, each with its
+    // region's index: a thread takes no new region once kMaxBlobs are found, so with two
+    // threads at most kMaxBlobs + 1 are.
+    std::atomic<std::size_t> next_region{0};
+    std::atomic<int> found_count{0}, found_slots{0};
+    struct Found {
+        std::size_t region = 0;
+        GestureBlob blob;
+    };
+    std::array<Found, GestureSegmenter::kMaxBlobs + 1> found;
+    // Takes regions until none is left or kMaxBlobs are found, measuring each into `s`.
+    void measure_regions(RegionScratch& s);
+    struct Field {  // this frame's lit field of view (analysis pixels), the rim distance
+        double cx = 0, cy = 0, r = 0, touch = 0;
+    } field;
+    const GestureSegmenterParams* params = nullptr;
+    // The region `s.label`'s blob into s.blob; false: no tool's tip (not entering from
+    // outside, not elongated, no valid features).
+    bool measure_region(const GestureSegmenterParams& p, RegionScratch& s);
 };
 
 namespace {
@@ -70,7 +117,221 @@ ENDOTOWER_WIDE_VECTORS void grey_row(const std::uint8_t* bgr, std::uint8_t* grey
         grey[x] = static_cast<std::uint8_t>((bgr[0] + bgr[1] + bgr[2]) / 3);
 }
 
+// `p` where `lit` is set, else 0, for one row of `width` pixels.
+ENDOTOWER_WIDE_VECTORS void keep_lit(const std::uint8_t* lit, std::uint8_t* p, int width) {
+    for (int x = 0; x < width; ++x) p[x] = lit[x] != 0 ? p[x] : 0;
+}
+
 }  // namespace
+
+void GestureSegmenter::Work::run_band(Band& b) {
+    if (band_reduce) {
+        const std::size_t first = static_cast<std::size_t>(b.y0) * b.reduce.factor();
+        b.reduce.run(frame->data + first * frame->format.stride, frame->format.stride,
+                     small.ptr(b.y0), small.step);
+    }
+    const int W = small.cols;
+    // The histogram four in turn: runs of one grey value do not wait on one counter.
+    for (auto& h : b.hists) h.fill(0);
+    for (int y = b.y0; y < b.y1; ++y) {
+        const std::uint8_t* bgr = small.ptr<std::uint8_t>(y);
+        std::uint8_t* g = gray.ptr<std::uint8_t>(y);
+        grey_row(bgr, g, W);
+        int x = 0;
+        for (; x + 4 <= W; x += 4)
+            for (int j = 0; j < 4; ++j) ++b.hists[j][g[x + j]];
+        for (; x < W; ++x) ++b.hists[0][g[x]];
+        if (table == nullptr) continue;
+        // The cells a row at a time, vectorised; the table lookups one by one.
+        ToolLikelihood::cells(bgr, b.cells.data(), W);
+        std::uint8_t* q = blurred.ptr<std::uint8_t>(y);
+        for (x = 0; x < W; ++x) q[x] = table[b.cells[x]];
+    }
+}
+
+void GestureSegmenter::Work::measure_regions(RegionScratch& s) {
+    while (found_count.load(std::memory_order_acquire) < static_cast<int>(kMaxBlobs)) {
+        const std::size_t i = next_region.fetch_add(1, std::memory_order_relaxed);
+        if (i >= regions.size()) return;
+        s.label = regions[i].label;
+        if (!measure_region(*params, s)) continue;
+        const auto slot =
+            static_cast<std::size_t>(found_slots.fetch_add(1, std::memory_order_relaxed));
+        if (slot < found.size()) found[slot] = {i, s.blob};  // always (the bound above)
+        found_count.fetch_add(1, std::memory_order_release);
+    }
+}
+
+bool GestureSegmenter::Work::measure_region(const GestureSegmenterParams& p, RegionScratch& s) {
+    const int W = small.cols, H = small.rows;
+    const double fcx = field.cx, fcy = field.cy, fr = field.r, touch = field.touch;
+    // Nearer the rim than `touch` (the field of view's circle or the picture's edge).
+    // The square root only near the circle: well inside it, r >= touch + 1 for sure.
+    const double inner = std::max(0.0, fr - touch - 1.0), inner2 = inner * inner;
+    auto entering = [&](int x, int y) {
+        if (std::min<double>({x + 1.0, y + 1.0, double(W - x), double(H - y)}) < touch) return true;
+        const double dx = x - fcx, dy = y - fcy;
+        if (dx * dx + dy * dy < inner2) return false;
+        return fr - std::hypot(dx, dy) < touch;
+    };
+    const Component& c = ops.components()[s.label];
+    const int bx = c.left, by = c.top, bw = c.right - c.left + 1, bh = c.bottom - c.top + 1;
+    // The distance transform in the box and one pixel around (the whole region's
+    // nearest zeros lie there: exactly cv::distanceTransform's values).
+    const int dx0 = std::max(0, bx - 1), dy0 = std::max(0, by - 1);
+    const int dx1 = std::min(W, bx + bw + 1), dy1 = std::min(H, by + bh + 1);
+    s.distances.chamfer(BytePlane{binary.data, W, H, binary.step}, dx0, dy0, dx1, dy1,
+                        s.dist.data());
+    s.pixels.clear();
+    s.entries.clear();
+    std::uint32_t radius_fixed = 0;
+    for (int y = by; y < by + bh; ++y) {
+        const int* l = labels.ptr<int>(y);
+        const std::uint32_t* d =
+            s.dist.data() + static_cast<std::size_t>(y - dy0) * (dx1 - dx0) - dx0;
+        for (int x = bx; x < bx + bw; ++x) {
+            if (l[x] != s.label) continue;
+            s.pixels.push_back({x, y});
+            if (entering(x, y))
+                s.entries.push_back({x, y}), radius_fixed = std::max(radius_fixed, d[x]);
+        }
+    }
+    // As cv::distanceTransform: float(distance) x 2^-16.
+    float radius = static_cast<float>(radius_fixed) * (1.0f / 65536.0f);
+    if (s.entries.empty()) return false;  // not entering from outside: not a tool
+    {  // A tool is a shaft: long for its width (second moments of the region).
+        double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+        for (const auto& p : s.pixels) mx += p.x, my += p.y;
+        mx /= s.pixels.size(), my /= s.pixels.size();
+        for (const auto& p : s.pixels)
+            sxx += (p.x - mx) * (p.x - mx), syy += (p.y - my) * (p.y - my),
+                sxy += (p.x - mx) * (p.y - my);
+        const double tr = sxx + syy, det = sxx * syy - sxy * sxy,
+                     disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
+        const double l1 = tr / 2 + disc, l2 = std::max(1e-9, tr / 2 - disc);
+        if (l1 < p.min_elongation * p.min_elongation * l2) return false;
+    }
+    // One or two entries: the entry pixels' two extremes, split if far apart.
+    auto d2 = [](const Work::Px& a, const Work::Px& b) {
+        return double(a.x - b.x) * (a.x - b.x) + double(a.y - b.y) * (a.y - b.y);
+    };
+    Work::Px pa = s.entries[0], pb = pa;
+    for (const auto& e : s.entries)
+        if (d2(e, s.entries[0]) > d2(pa, s.entries[0])) pa = e;
+    for (const auto& e : s.entries)
+        if (d2(e, pa) > d2(pb, pa)) pb = e;
+    const bool two = std::sqrt(d2(pa, pb)) > 6.0 * std::max(2.0f, radius);
+    double ax = 0, ay = 0, bx2 = 0, by2 = 0;
+    int na = 0, nb = 0;
+    std::uint32_t ra_fixed = 0, rb_fixed = 0;  // each entry's shaft radius
+    // With two: how near each comes to the rim, its farthest pixel from the field
+    // of view's centre (squared) and its nearest to the picture's edge.
+    double qa = 0, qb = 0, edge_a = W + H, edge_b = W + H;
+    for (const auto& e : s.entries) {
+        const std::uint32_t d =
+            s.dist[static_cast<std::size_t>(e.y - dy0) * (dx1 - dx0) + (e.x - dx0)];
+        if (!two) {
+            ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
+            continue;
+        }
+        const double q = (e.x - fcx) * (e.x - fcx) + (e.y - fcy) * (e.y - fcy),
+                     edge = std::min({e.x + 1.0, e.y + 1.0, double(W - e.x), double(H - e.y)});
+        if (d2(e, pb) < d2(e, pa)) {
+            bx2 += e.x, by2 += e.y, ++nb, rb_fixed = std::max(rb_fixed, d);
+            qb = std::max(qb, q), edge_b = std::min(edge_b, edge);
+        } else {
+            ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
+            qa = std::max(qa, q), edge_a = std::min(edge_a, edge);
+        }
+    }
+    // A shaft crosses the rim; a jaw's end that only comes near it (an open jaw
+    // reaching towards the rim) is no entry: where one of the two does not reach
+    // within `entry_rim_fraction` x width of the rim, the region enters once.
+    if (nb > 0 && p.entry_rim_fraction > 0) {
+        const double crossing = p.entry_rim_fraction * W;
+        const bool a_in = std::min(fr - std::sqrt(qa), edge_a) <= crossing,
+                   b_in = std::min(fr - std::sqrt(qb), edge_b) <= crossing;
+        if (a_in != b_in) {
+            if (b_in) ax = bx2, ay = by2, na = nb, ra_fixed = rb_fixed;
+            nb = 0, bx2 = by2 = 0;
+            radius = static_cast<float>(ra_fixed) * (1.0f / 65536.0f);
+        }
+    }
+    ax /= na, ay /= na;
+    if (nb > 0) bx2 /= nb, by2 /= nb;
+    auto reach = [&](const Work::Px& p) {
+        const double da = std::hypot(p.x - ax, p.y - ay);
+        return nb > 0 ? std::min(da, std::hypot(p.x - bx2, p.y - by2)) : da;
+    };
+    // sqrt(dx^2 + dy^2) is within a few ulp of hypot: hypot only where that could
+    // change the farthest reach or the 97 % cut.
+    auto approx = [&](const Work::Px& p) {
+        const double dx = p.x - ax, dy = p.y - ay, ex = p.x - bx2, ey = p.y - by2;
+        const double q = dx * dx + dy * dy;
+        return std::sqrt(nb > 0 ? std::min(q, ex * ex + ey * ey) : q);
+    };
+    constexpr double kSlack = 1e-12;
+    double far_approx = -1;
+    for (std::size_t i = 0; i < s.pixels.size(); ++i)
+        far_approx = std::max(far_approx, s.reach[i] = approx(s.pixels[i]));
+    double far = -1;
+    for (std::size_t i = 0; i < s.pixels.size(); ++i)
+        if (s.reach[i] >= far_approx * (1 - kSlack)) far = std::max(far, reach(s.pixels[i]));
+    // The tip: mean of the pixels within 3 % of the farthest reach.
+    const double cut = 0.97 * far;
+    double tx = 0, ty = 0;
+    int nt = 0;
+    for (std::size_t i = 0; i < s.pixels.size(); ++i) {
+        const double r = s.reach[i];
+        if (r > cut * (1 + kSlack) || (r >= cut * (1 - kSlack) && reach(s.pixels[i]) >= cut))
+            tx += s.pixels[i].x, ty += s.pixels[i].y, ++nt;
+    }
+    tx /= nt, ty /= nt;
+    if (radius < 1.0f) radius = 1.0f;
+    const double R = p.window_radii * radius;
+    const int x0 = std::max(0, static_cast<int>(tx - R) - 1),
+              y0 = std::max(0, static_cast<int>(ty - R) - 1);
+    const int x1 = std::min(W, static_cast<int>(tx + R) + 2),
+              y1 = std::min(H, static_cast<int>(ty + R) + 2);
+    cv::Mat win = s.window(cv::Rect(x0, y0, x1 - x0, y1 - y0));
+    win.setTo(0);
+    // hypot(dx, dy) <= R, the square root only where dx^2 + dy^2 is within 1e-9 of R^2.
+    const double r2_in = R * R * (1 - 1e-9), r2_out = R * R * (1 + 1e-9);
+    for (const auto& p : s.pixels) {
+        if (p.x < x0 || p.x >= x1 || p.y < y0 || p.y >= y1) continue;
+        const double dx = p.x - tx, dy = p.y - ty, q = dx * dx + dy * dy;
+        if (q <= r2_in || (q < r2_out && std::hypot(dx, dy) <= R))
+            win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
+    }
+    GestureBlob& b = s.blob;
+    b.arms = count_arms(win, tx - x0, ty - y0, R - 1.5);  // before the tracer marks it
+    // Two tools, one much thicker near the scope: the window of the thinner shaft.
+    b.thin_arms = 0;
+    if (nb > 0) {
+        const double r_thin =
+            std::max(1.0, static_cast<double>(std::min(ra_fixed, rb_fixed)) * (1.0 / 65536.0));
+        b.thin_arms = count_arms(win, tx - x0, ty - y0, p.window_radii * r_thin - 1.5);
+    }
+    // The profile's axis: from the tip to the entry it was reached from.
+    GestureFeatures profile;
+    if (p.profile) {
+        double ex = ax, ey = ay;
+        if (nb > 0 && std::hypot(tx - bx2, ty - by2) < std::hypot(tx - ax, ty - ay))
+            ex = bx2, ey = by2;
+        const double len = std::max(1e-9, std::hypot(ex - tx, ey - ty));
+        measure_tip_profile(win.data, win.cols, win.rows, static_cast<int>(win.step), tx - x0,
+                            ty - y0, (ex - tx) / len, (ey - ty) / len, radius, profile);
+    }
+    b.features = measure_gesture_features(win.data, win.cols, win.rows, static_cast<int>(win.step),
+                                          s.tracer);
+    b.features.profile_width = profile.profile_width;
+    b.features.profile_runs = profile.profile_runs;
+    if (!b.features.valid) return false;
+    b.tip = {tx / scale, ty / scale};
+    b.radius_px = radius / scale;
+    b.entries = nb > 0 ? 2 : 1;
+    return true;
+}
 
 GestureSegmenter::GestureSegmenter(const ToolLikelihood* model, GestureSegmenterParams params)
     : model_(model), params_(params), work_(std::make_unique<Work>()) {}
@@ -83,15 +344,26 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     const int sh = std::max(1, static_cast<int>(std::lround(format.height * w.scale)));
     w.small.create(sh, sw, CV_8UC3);
     w.reduce.configure(format.width, format.height, sw, sh, 3);
-    for (cv::Mat* m :
-         {&w.gray, &w.blurred, &w.lit, &w.eroded, &w.a, &w.opened, &w.binary, &w.window})
+    for (cv::Mat* m : {&w.gray, &w.blurred, &w.lit, &w.eroded, &w.a, &w.opened, &w.binary})
         m->create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
     w.ops.configure(sw, sh);
-    w.tracer.reserve(sw, sh);
-    w.cells.resize(static_cast<std::size_t>(sw));
-    w.dist.resize(static_cast<std::size_t>(sw) * sh);
-    w.reach.resize(static_cast<std::size_t>(sw) * sh);
+    // Two bands of rows (halves) with `threads` = 2, else one; each band's own block
+    // mean where the reduction is one (integer factor k: band rows [y0, y1) are the
+    // input rows [k y0, k y1)).
+    w.band_count = params_.threads >= 2 && sh >= 2 ? 2 : 1;
+    const int k = format.width / sw;
+    const bool block = format.width == k * sw && format.height == k * sh;
+    for (int i = 0; i < 2; ++i) {
+        Work::Band& b = w.bands[i];
+        b.y0 = i == 0 ? 0 : (w.band_count == 2 ? sh / 2 : sh);
+        b.y1 = i == 0 && w.band_count == 2 ? sh / 2 : sh;
+        b.reduce = BlockMean{};
+        if (block && b.y1 > b.y0)
+            b.reduce.configure(format.width, k * (b.y1 - b.y0), sw, b.y1 - b.y0, 3);
+        b.cells.assign(static_cast<std::size_t>(sw), 0);
+    }
+    if (w.band_count == 2 && !w.helper) w.helper = std::make_unique<detail::HelperThread>();
     const int big =
         std::max(3, static_cast<int>(std::lround(params_.large_element_fraction * sw)) | 1);
     w.large_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(big, big));
@@ -100,8 +372,16 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     MaskOps::ellipse_rows(3, w.fov_rows);  // 7x7
     // Every list at its largest possible size: no reallocation per frame, whatever the mask.
     const auto area = static_cast<std::size_t>(sw) * sh;
-    w.pixels.reserve(area);
-    w.entries.reserve(area);
+    for (int i = 0; i < w.band_count; ++i) {  // the second only for the helper
+        Work::RegionScratch& rs = w.scratch[i];
+        rs.distances.configure_chamfer(sw, sh);
+        rs.tracer.reserve(sw, sh);
+        rs.dist.resize(area);
+        rs.reach.resize(area);
+        rs.pixels.reserve(area);
+        rs.entries.reserve(area);
+        rs.window.create(sh, sw, CV_8U);
+    }
     w.regions.reserve(static_cast<std::size_t>((sw + 1) / 2) * ((sh + 1) / 2) + 1);
 }
 
@@ -112,22 +392,27 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     if (params_.method == GestureSegmentation::kLikelihood &&
         (model_ == nullptr || !model_->trained()))
         return 0;
-    detail::reduce_frame(frame, w.reduce, w.small);
     const int W = w.small.cols, H = w.small.rows;
-
-    // Grey value per pixel (a vectorised row), then its histogram (four in turn: runs
-    // of one grey value do not wait on one counter).
-    std::array<std::array<int, 256>, 4> hists{};
-    for (int y = 0; y < H; ++y) {
-        std::uint8_t* g = w.gray.ptr<std::uint8_t>(y);
-        grey_row(w.small.ptr<std::uint8_t>(y), g, W);
-        int x = 0;
-        for (; x + 4 <= W; x += 4)
-            for (int j = 0; j < 4; ++j) ++hists[j][g[x + j]];
-        for (; x < W; ++x) ++hists[0][g[x]];
-    }
+    // The reduction in the bands where it is their block mean (the frame of the size
+    // configured), else here first.
+    w.band_reduce =
+        w.bands[0].reduce.ready() && w.reduce.fits(frame.format.width, frame.format.height);
+    if (!w.band_reduce) detail::reduce_frame(frame, w.reduce, w.small);
+    w.frame = &frame;
+    w.table = params_.method == GestureSegmentation::kLikelihood ? model_->table().data() : nullptr;
+    if (w.band_count == 2)
+        w.helper->post(
+            [](void* work) {
+                auto& ww = *static_cast<Work*>(work);
+                ww.run_band(ww.bands[1]);
+            },
+            &w);
+    w.run_band(w.bands[0]);
+    if (w.band_count == 2) w.helper->wait();
     std::array<int, 256> hist{};
-    for (int v = 0; v < 256; ++v) hist[v] = hists[0][v] + hists[1][v] + hists[2][v] + hists[3][v];
+    for (int i = 0; i < w.band_count; ++i)
+        for (const auto& h : w.bands[i].hists)
+            for (int v = 0; v < 256; ++v) hist[v] += h[v];
     // The lit field of view (as LikelihoodToolTracker): brighter than 0.35 x the median
     // after a 9x9 mean, so a dark shaft inside it stays inside; then eroded (7x7 ellipse).
     int median = 0;
@@ -143,18 +428,12 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     w.ops.morph(plane(w.lit), plane(w.eroded), std::span<const int>(w.fov_rows.data(), 7), true);
 
     if (params_.method == GestureSegmentation::kLikelihood) {
-        // The tool probability, only where lit: the 5x5 Gaussian of a pixel inside the
-        // eroded field of view reads only lit pixels (the ellipse covers its 5x5), and
-        // every other pixel is cleared by the AND below, so the mask is the same.
-        // The cells a row at a time, vectorised; the table lookups one by one.
-        const std::uint8_t* table = model_->table().data();
-        const std::uint16_t* cell = w.cells.data();
-        for (int y = 0; y < H; ++y) {
-            ToolLikelihood::cells(w.small.ptr<std::uint8_t>(y), w.cells.data(), W);
-            const std::uint8_t* l = w.lit.ptr<std::uint8_t>(y);
-            std::uint8_t* q = w.blurred.ptr<std::uint8_t>(y);
-            for (int x = 0; x < W; ++x) q[x] = l[x] ? table[cell[x]] : 0;
-        }
+        // The tool probability (the bands'), only where lit: the 5x5 Gaussian of a
+        // pixel inside the eroded field of view reads only lit pixels (the ellipse
+        // covers its 5x5), and every other pixel is cleared by the AND below, so the
+        // mask is the same.
+        for (int y = 0; y < H; ++y)
+            keep_lit(w.lit.ptr<std::uint8_t>(y), w.blurred.ptr<std::uint8_t>(y), W);
         w.ops.smooth_at_least(plane(w.blurred), params_.threshold, plane(w.eroded),
                               plane(w.binary));
         w.ops.open3(plane(w.binary), plane(w.binary));
@@ -180,175 +459,31 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         return a.area != b.area ? a.area > b.area : a.label < b.label;
     });
     if (w.regions.empty()) return 0;
-    // Nearer the rim than `touch` (the field of view's circle or the picture's edge).
-    // The square root only near the circle: well inside it, r >= touch + 1 for sure.
-    const double inner = std::max(0.0, fr - touch - 1.0), inner2 = inner * inner;
-    auto entering = [&](int x, int y) {
-        if (std::min<double>({x + 1.0, y + 1.0, double(W - x), double(H - y)}) < touch) return true;
-        const double dx = x - fcx, dy = y - fcy;
-        if (dx * dx + dy * dy < inner2) return false;
-        return fr - std::hypot(dx, dy) < touch;
-    };
-    std::size_t found = 0;
-    for (const Work::Region& reg : w.regions) {
-        if (found == out.size()) break;
-        const Component& c = comps[reg.label];
-        const int bx = c.left, by = c.top, bw = c.right - c.left + 1, bh = c.bottom - c.top + 1;
-        // The distance transform in the box and one pixel around (the whole region's
-        // nearest zeros lie there: exactly cv::distanceTransform's values).
-        const int dx0 = std::max(0, bx - 1), dy0 = std::max(0, by - 1);
-        const int dx1 = std::min(W, bx + bw + 1), dy1 = std::min(H, by + bh + 1);
-        w.ops.chamfer(plane(w.binary), dx0, dy0, dx1, dy1, w.dist.data());
-        w.pixels.clear();
-        w.entries.clear();
-        std::uint32_t radius_fixed = 0;
-        for (int y = by; y < by + bh; ++y) {
-            const int* l = w.labels.ptr<int>(y);
-            const std::uint32_t* d =
-                w.dist.data() + static_cast<std::size_t>(y - dy0) * (dx1 - dx0) - dx0;
-            for (int x = bx; x < bx + bw; ++x) {
-                if (l[x] != reg.label) continue;
-                w.pixels.push_back({x, y});
-                if (entering(x, y))
-                    w.entries.push_back({x, y}), radius_fixed = std::max(radius_fixed, d[x]);
-            }
-        }
-        // As cv::distanceTransform: float(distance) x 2^-16.
-        float radius = static_cast<float>(radius_fixed) * (1.0f / 65536.0f);
-        if (w.entries.empty()) continue;  // not entering from outside: not a tool
-        {  // A tool is a shaft: long for its width (second moments of the region).
-            double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
-            for (const auto& p : w.pixels) mx += p.x, my += p.y;
-            mx /= w.pixels.size(), my /= w.pixels.size();
-            for (const auto& p : w.pixels)
-                sxx += (p.x - mx) * (p.x - mx), syy += (p.y - my) * (p.y - my),
-                    sxy += (p.x - mx) * (p.y - my);
-            const double tr = sxx + syy, det = sxx * syy - sxy * sxy,
-                         disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
-            const double l1 = tr / 2 + disc, l2 = std::max(1e-9, tr / 2 - disc);
-            if (l1 < params_.min_elongation * params_.min_elongation * l2) continue;
-        }
-        // One or two entries: the entry pixels' two extremes, split if far apart.
-        auto d2 = [](const Work::Px& a, const Work::Px& b) {
-            return double(a.x - b.x) * (a.x - b.x) + double(a.y - b.y) * (a.y - b.y);
-        };
-        Work::Px pa = w.entries[0], pb = pa;
-        for (const auto& e : w.entries)
-            if (d2(e, w.entries[0]) > d2(pa, w.entries[0])) pa = e;
-        for (const auto& e : w.entries)
-            if (d2(e, pa) > d2(pb, pa)) pb = e;
-        const bool two = std::sqrt(d2(pa, pb)) > 6.0 * std::max(2.0f, radius);
-        double ax = 0, ay = 0, bx2 = 0, by2 = 0;
-        int na = 0, nb = 0;
-        std::uint32_t ra_fixed = 0, rb_fixed = 0;  // each entry's shaft radius
-        // With two: how near each comes to the rim, its farthest pixel from the field
-        // of view's centre (squared) and its nearest to the picture's edge.
-        double qa = 0, qb = 0, edge_a = W + H, edge_b = W + H;
-        for (const auto& e : w.entries) {
-            const std::uint32_t d =
-                w.dist[static_cast<std::size_t>(e.y - dy0) * (dx1 - dx0) + (e.x - dx0)];
-            if (!two) {
-                ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
-                continue;
-            }
-            const double q = (e.x - fcx) * (e.x - fcx) + (e.y - fcy) * (e.y - fcy),
-                         edge = std::min({e.x + 1.0, e.y + 1.0, double(W - e.x), double(H - e.y)});
-            if (d2(e, pb) < d2(e, pa)) {
-                bx2 += e.x, by2 += e.y, ++nb, rb_fixed = std::max(rb_fixed, d);
-                qb = std::max(qb, q), edge_b = std::min(edge_b, edge);
-            } else {
-                ax += e.x, ay += e.y, ++na, ra_fixed = std::max(ra_fixed, d);
-                qa = std::max(qa, q), edge_a = std::min(edge_a, edge);
-            }
-        }
-        // A shaft crosses the rim; a jaw's end that only comes near it (an open jaw
-        // reaching towards the rim) is no entry: where one of the two does not reach
-        // within `entry_rim_fraction` x width of the rim, the region enters once.
-        if (nb > 0 && params_.entry_rim_fraction > 0) {
-            const double crossing = params_.entry_rim_fraction * W;
-            const bool a_in = std::min(fr - std::sqrt(qa), edge_a) <= crossing,
-                       b_in = std::min(fr - std::sqrt(qb), edge_b) <= crossing;
-            if (a_in != b_in) {
-                if (b_in) ax = bx2, ay = by2, na = nb, ra_fixed = rb_fixed;
-                nb = 0, bx2 = by2 = 0;
-                radius = static_cast<float>(ra_fixed) * (1.0f / 65536.0f);
-            }
-        }
-        ax /= na, ay /= na;
-        if (nb > 0) bx2 /= nb, by2 /= nb;
-        auto reach = [&](const Work::Px& p) {
-            const double da = std::hypot(p.x - ax, p.y - ay);
-            return nb > 0 ? std::min(da, std::hypot(p.x - bx2, p.y - by2)) : da;
-        };
-        // sqrt(dx^2 + dy^2) is within a few ulp of hypot: hypot only where that could
-        // change the farthest reach or the 97 % cut.
-        auto approx = [&](const Work::Px& p) {
-            const double dx = p.x - ax, dy = p.y - ay, ex = p.x - bx2, ey = p.y - by2;
-            const double q = dx * dx + dy * dy;
-            return std::sqrt(nb > 0 ? std::min(q, ex * ex + ey * ey) : q);
-        };
-        constexpr double kSlack = 1e-12;
-        double far_approx = -1;
-        for (std::size_t i = 0; i < w.pixels.size(); ++i)
-            far_approx = std::max(far_approx, w.reach[i] = approx(w.pixels[i]));
-        double far = -1;
-        for (std::size_t i = 0; i < w.pixels.size(); ++i)
-            if (w.reach[i] >= far_approx * (1 - kSlack)) far = std::max(far, reach(w.pixels[i]));
-        // The tip: mean of the pixels within 3 % of the farthest reach.
-        const double cut = 0.97 * far;
-        double tx = 0, ty = 0;
-        int nt = 0;
-        for (std::size_t i = 0; i < w.pixels.size(); ++i) {
-            const double r = w.reach[i];
-            if (r > cut * (1 + kSlack) || (r >= cut * (1 - kSlack) && reach(w.pixels[i]) >= cut))
-                tx += w.pixels[i].x, ty += w.pixels[i].y, ++nt;
-        }
-        tx /= nt, ty /= nt;
-        if (radius < 1.0f) radius = 1.0f;
-        const double R = params_.window_radii * radius;
-        const int x0 = std::max(0, static_cast<int>(tx - R) - 1),
-                  y0 = std::max(0, static_cast<int>(ty - R) - 1);
-        const int x1 = std::min(W, static_cast<int>(tx + R) + 2),
-                  y1 = std::min(H, static_cast<int>(ty + R) + 2);
-        cv::Mat win = w.window(cv::Rect(x0, y0, x1 - x0, y1 - y0));
-        win.setTo(0);
-        // hypot(dx, dy) <= R, the square root only where dx^2 + dy^2 is within 1e-9 of R^2.
-        const double r2_in = R * R * (1 - 1e-9), r2_out = R * R * (1 + 1e-9);
-        for (const auto& p : w.pixels) {
-            if (p.x < x0 || p.x >= x1 || p.y < y0 || p.y >= y1) continue;
-            const double dx = p.x - tx, dy = p.y - ty, q = dx * dx + dy * dy;
-            if (q <= r2_in || (q < r2_out && std::hypot(dx, dy) <= R))
-                win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
-        }
-        GestureBlob& b = out[found];
-        b.arms = count_arms(win, tx - x0, ty - y0, R - 1.5);  // before the tracer marks it
-        // Two tools, one much thicker near the scope: the window of the thinner shaft.
-        b.thin_arms = 0;
-        if (nb > 0) {
-            const double r_thin =
-                std::max(1.0, static_cast<double>(std::min(ra_fixed, rb_fixed)) * (1.0 / 65536.0));
-            b.thin_arms = count_arms(win, tx - x0, ty - y0, params_.window_radii * r_thin - 1.5);
-        }
-        // The profile's axis: from the tip to the entry it was reached from.
-        GestureFeatures profile;
-        if (params_.profile) {
-            double ex = ax, ey = ay;
-            if (nb > 0 && std::hypot(tx - bx2, ty - by2) < std::hypot(tx - ax, ty - ay))
-                ex = bx2, ey = by2;
-            const double len = std::max(1e-9, std::hypot(ex - tx, ey - ty));
-            measure_tip_profile(win.data, win.cols, win.rows, static_cast<int>(win.step), tx - x0,
-                                ty - y0, (ex - tx) / len, (ey - ty) / len, radius, profile);
-        }
-        b.features = measure_gesture_features(win.data, win.cols, win.rows,
-                                              static_cast<int>(win.step), w.tracer);
-        b.features.profile_width = profile.profile_width;
-        b.features.profile_runs = profile.profile_runs;
-        if (!b.features.valid) continue;
-        b.tip = {tx / w.scale, ty / w.scale};
-        b.radius_px = radius / w.scale;
-        b.entries = nb > 0 ? 2 : 1;
-        ++found;
-    }
+    // Each region's tip and features until kMaxBlobs are found, the regions taken in size
+    // order by whichever thread is free (the caller, the helper); the blobs are the first
+    // kMaxBlobs found in size order, as one thread finds them. A thread stops taking
+    // regions once kMaxBlobs are found, and every region it took before is smaller in
+    // the order than any it did not take, so those first kMaxBlobs are among the found.
+    w.field = {fcx, fcy, fr, touch};
+    w.params = &params_;
+    w.next_region.store(0, std::memory_order_relaxed);
+    w.found_count.store(0, std::memory_order_relaxed);
+    w.found_slots.store(0, std::memory_order_relaxed);
+    if (w.band_count == 2)
+        w.helper->post(
+            [](void* work) {
+                auto& ww = *static_cast<Work*>(work);
+                ww.measure_regions(ww.scratch[1]);
+            },
+            &w);
+    w.measure_regions(w.scratch[0]);
+    if (w.band_count == 2) w.helper->wait();
+    const auto n_found = std::min(
+        w.found.size(), static_cast<std::size_t>(w.found_slots.load(std::memory_order_relaxed)));
+    std::sort(w.found.begin(), w.found.begin() + static_cast<std::ptrdiff_t>(n_found),
+              [](const Work::Found& a, const Work::Found& b) { return a.region < b.region; });
+    const std::size_t found = std::min(n_found, out.size());
+    for (std::size_t i = 0; i < found; ++i) out[i] = w.found[i].blob;
     return found;
 }
 

@@ -269,6 +269,12 @@ int MaskOps::label(BytePlane m, std::int32_t* labels) {
     return n;
 }
 
+void MaskOps::configure_chamfer(int width, int height) {
+    width_ = std::max(1, width);
+    height_ = std::max(1, height);
+    chamfer_.assign(static_cast<std::size_t>(width_ + 2) * (height_ + 2), 0);
+}
+
 void MaskOps::chamfer(BytePlane m, int x0, int y0, int x1, int y1, std::uint32_t* out) {
     const int ww = x1 - x0, wh = y1 - y0, s = ww + 2;
     std::uint32_t* t = chamfer_.data();

@@ -14,10 +14,12 @@
 // new and the C allocator counted, heap_counter.cpp; not under the sanitizers).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "endotower/scene/renderer.hpp"
@@ -211,4 +213,80 @@ TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
     if (test::heap_allocations() < 0) GTEST_SKIP() << "allocations not counted (sanitizer)";
     EXPECT_EQ(test::heap_allocations(), 0);
     EXPECT_EQ(test::c_allocations(), 0);
+}
+
+// With the helper thread (threads = 2, the default: the lower half of the rows reduced
+// and measured there, and the regions shared, each thread taking the next one when
+// free) the segmenter gives exactly what one thread gives: the same mask bytes and the
+// same blobs, in the same order, field for field. Frame sizes: the 1/3 block mean in two
+// equal halves (1920x1080), in unequal ones (1920x1083: 361 rows), and a non-integer
+// factor (1000x562: AreaMean's general path before the bands); frames with more regions
+// than kMaxBlobs, so some are rejected and some left unmeasured.
+TEST(GestureSegmenterThreads, TheHelperGivesWhatOneThreadGives) {
+    const std::string root = ENDOTOWER_SOURCE_DIR;
+    std::string error;
+    ToolLikelihood model;
+    ASSERT_TRUE(model.load(root + "/board/sim/models/gesture_tool_likelihood.bin", error)) << error;
+    struct Case {
+        const char* scenario;
+        int width, height, frames, step;
+    };
+    const Case cases[] = {{"fig323_double_gestures", 1920, 1080, 7, 6},
+                          {"t41_distractors", 1920, 1083, 6, 20},
+                          {"surgery_motion", 1000, 562, 8, 37},
+                          {"two_tools_crossing", 1920, 1080, 6, 20}};
+    int compared = 0, crowded = 0;
+    for (const Case& c : cases) {
+        scene::Scenario scenario;
+        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
+                                         scenario, error))
+            << error;
+        scenario.width = c.width;
+        scenario.height = c.height;
+        scene::SceneRenderer renderer;
+        ASSERT_TRUE(renderer.init(scenario, 5, error)) << error;
+        GestureSegmenterParams one, two;
+        one.threads = 1;
+        one.profile = two.profile = true;
+        GestureSegmenter single(&model, one), helped(&model, two);
+        const hal::FrameFormat fmt{c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
+        single.configure(fmt);
+        helped.configure(fmt);
+        scene::Image image;
+        scene::FrameTruth truth;
+        for (int k = 0; k < c.frames; ++k) {
+            renderer.render(k * c.step, image, truth);
+            hal::Frame f;
+            f.format = fmt;
+            f.data = image.bgr.data();
+            std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{}, b{};
+            const std::size_t na = single.segment(f, a), nb = helped.segment(f, b);
+            SCOPED_TRACE(std::string(c.scenario) + " frame " + std::to_string(k * c.step));
+            ASSERT_EQ(na, nb);
+            ASSERT_TRUE(std::equal(single.mask().begin(), single.mask().end(),
+                                   helped.mask().begin(), helped.mask().end()));
+            for (std::size_t i = 0; i < na; ++i) {
+                EXPECT_EQ(a[i].tip.x, b[i].tip.x);
+                EXPECT_EQ(a[i].tip.y, b[i].tip.y);
+                EXPECT_EQ(a[i].radius_px, b[i].radius_px);
+                EXPECT_EQ(a[i].entries, b[i].entries);
+                EXPECT_EQ(a[i].arms, b[i].arms);
+                EXPECT_EQ(a[i].thin_arms, b[i].thin_arms);
+                EXPECT_EQ(a[i].features.as_vector(), b[i].features.as_vector());
+            }
+            // Regions: the mask's 8-connected parts of at least the minimum area.
+            const int w = single.mask_width(), h = static_cast<int>(single.mask().size()) / w;
+            const cv::Mat mask(h, w, CV_8U, const_cast<std::uint8_t*>(single.mask().data()));
+            cv::Mat labels, stats, centroids;
+            const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8);
+            int regions = 0;
+            for (int i = 1; i < n; ++i)
+                regions += stats.at<int>(i, cv::CC_STAT_AREA) >= one.min_area_fraction * w * h;
+            crowded += regions > static_cast<int>(GestureSegmenter::kMaxBlobs);
+            compared += static_cast<int>(na);
+        }
+    }
+    std::printf("compared %d blobs, %d frames with more regions than blobs\n", compared, crowded);
+    EXPECT_GE(compared, 20);  // 28 on x86-64
+    EXPECT_GT(crowded, 0);
 }

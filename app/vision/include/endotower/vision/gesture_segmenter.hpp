@@ -28,9 +28,13 @@
 //     cross the window's edge, and for a region entering twice also those crossing
 //     the circle of `window_radii` x the thinner entry's radius (`thin_arms`).
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
-// Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are
-// allocated in configure(); own code (BlockMean, MaskOps, ContourTracer) gives the bytes
-// of the OpenCV calls it replaces, without their allocations (docs/gestures.md#speed).
+// Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are set up
+// in configure(), and with `threads` = 2 a helper thread that, inside segment(), takes
+// the lower half of the rows of the per-pixel passes (reduction, grey value, tool
+// probability) and shares the regions (each thread takes the next one when free): the
+// same bytes and blobs as one thread. Own
+// code (BlockMean, MaskOps, ContourTracer) gives the bytes of the OpenCV calls it
+// replaces, without their allocations (docs/gestures.md#speed).
 #pragma once
 
 #include <array>
@@ -59,6 +63,7 @@ struct GestureSegmenterParams {
     double window_radii = 8.0;
     double entry_rim_fraction = 0.0125;  // an entry reaches this near the rim (x width)
     bool profile = false;  // measure the profile features (a kProfile model reads them)
+    int threads = 2;       // 2: a helper thread shares segment()'s work (above); 1: none
 };
 
 struct GestureBlob {

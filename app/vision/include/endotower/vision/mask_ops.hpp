@@ -61,6 +61,9 @@ public:
     int label(BytePlane mask, std::int32_t* labels);  // labels: width x height, packed
     const std::vector<Component>& components() const { return components_; }  // per label
     void chamfer(BytePlane mask, int x0, int y0, int x1, int y1, std::uint32_t* out);
+    // Sizes chamfer()'s buffer alone, for images up to width x height: a MaskOps that
+    // only measures distances (one per thread measuring regions).
+    void configure_chamfer(int width, int height);
 
 private:
     int width_ = 0, height_ = 0;

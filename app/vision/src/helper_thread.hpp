@@ -1,0 +1,42 @@
+// HelperThread: one thread that runs a job beside its owner, for the per-frame loops
+// that split an image's rows in two (the board has two cores; the analysis thread takes
+// one half, the helper the other: the frame's reduction waits on memory, and two cores
+// fetch it faster than one).
+//
+// post(job, arg) hands the helper `job(arg)`; wait() returns once it has run. One job at
+// a time, posted and waited for by the owner's thread; the job must not throw. The
+// thread starts in the constructor and is joined in the destructor. No allocation and
+// no system call beyond the futex wake-ups per job. Private to app/vision.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+
+namespace endotower::vision::detail {
+
+class HelperThread {
+public:
+    using Job = void (*)(void*);
+    HelperThread();
+    ~HelperThread();
+    HelperThread(const HelperThread&) = delete;
+    HelperThread& operator=(const HelperThread&) = delete;
+
+    void post(Job job, void* arg);
+    void wait();
+
+private:
+    void loop();
+
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    Job job_ = nullptr;
+    void* arg_ = nullptr;
+    std::uint64_t posted_ = 0, done_ = 0;
+    bool quit_ = false;
+    std::thread thread_;  // last: starts once the members above exist
+};
+
+}  // namespace endotower::vision::detail
