@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <system_error>
 #include <vector>
 
 #include "endotower/vision/area_mean.hpp"
@@ -33,7 +34,7 @@ struct GestureSegmenter::Work {
     bool band_reduce = false;                      // this frame's reduction is the bands'
     const hal::Frame* frame = nullptr;             // the frame the bands reduce
     const std::uint8_t* table = nullptr;           // the tool probability; null: not needed
-    std::unique_ptr<detail::HelperThread> helper;  // band 1, the second region
+    std::unique_ptr<detail::HelperThread> helper;  // band 1, its share of the regions
     void run_band(Band& b);
     MaskOps ops;
     std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths
@@ -352,6 +353,13 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     // mean where the reduction is one (integer factor k: band rows [y0, y1) are the
     // input rows [k y0, k y1)).
     w.band_count = params_.threads >= 2 && sh >= 2 ? 2 : 1;
+    if (w.band_count == 2 && !w.helper) {
+        try {
+            w.helper = std::make_unique<detail::HelperThread>();
+        } catch (const std::system_error&) {
+            w.band_count = 1;  // no thread to be had (a process limit): all on the caller
+        }
+    }
     const int k = format.width / sw;
     const bool block = format.width == k * sw && format.height == k * sh;
     for (int i = 0; i < 2; ++i) {
@@ -363,7 +371,6 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
             b.reduce.configure(format.width, k * (b.y1 - b.y0), sw, b.y1 - b.y0, 3);
         b.cells.assign(static_cast<std::size_t>(sw), 0);
     }
-    if (w.band_count == 2 && !w.helper) w.helper = std::make_unique<detail::HelperThread>();
     const int big =
         std::max(3, static_cast<int>(std::lround(params_.large_element_fraction * sw)) | 1);
     w.large_element = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(big, big));

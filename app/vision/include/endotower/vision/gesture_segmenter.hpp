@@ -63,7 +63,7 @@ struct GestureSegmenterParams {
     double window_radii = 8.0;
     double entry_rim_fraction = 0.0125;  // an entry reaches this near the rim (x width)
     bool profile = false;  // measure the profile features (a kProfile model reads them)
-    int threads = 2;       // 2: a helper thread shares segment()'s work (above); 1: none
+    int threads = 2;       // 2: a helper thread shares segment()'s work (above; 1 if none starts)
 };
 
 struct GestureBlob {
