@@ -32,9 +32,9 @@
 // in configure(), and with `threads` = 2 a helper thread that, inside segment(), takes
 // the lower half of the rows of the per-pixel passes (reduction, grey value, tool
 // probability) and shares the regions (each thread takes the next one when free): the
-// same bytes and blobs as one thread. Own
-// code (BlockMean, MaskOps, ContourTracer) gives the bytes of the OpenCV calls it
-// replaces, without their allocations (docs/gestures.md#speed).
+// same bytes and blobs as one thread. Own code (BlockMean, MaskOps, ContourTracer)
+// gives the bytes of the OpenCV calls it replaces, without their allocations
+// (docs/gestures.md#speed).
 #pragma once
 
 #include <array>
