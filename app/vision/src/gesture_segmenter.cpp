@@ -36,6 +36,10 @@ struct GestureSegmenter::Work {
     const std::uint8_t* table = nullptr;           // the tool probability; null: not needed
     std::unique_ptr<detail::HelperThread> helper;  // band 1, its share of the regions
     void run_band(Band& b);
+    // part(*this, 1) on the helper (two bands) while the caller runs part(*this, 0).
+    using Part = void (*)(Work&, int);
+    Part part = nullptr;
+    void share(Part p);
     MaskOps ops;
     std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths
     cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels;
@@ -78,7 +82,7 @@ struct GestureSegmenter::Work {
     const GestureSegmenterParams* params = nullptr;
     // The region `s.label`'s blob into s.blob; false: no tool's tip (not entering from
     // outside, not elongated, no valid features).
-    bool measure_region(const GestureSegmenterParams& p, RegionScratch& s);
+    bool measure_region(RegionScratch& s);
 };
 
 namespace {
@@ -155,7 +159,7 @@ void GestureSegmenter::Work::measure_regions(RegionScratch& s) {
         const std::size_t i = next_region.fetch_add(1, std::memory_order_relaxed);
         if (i >= regions.size()) return;
         s.label = regions[i].label;
-        if (!measure_region(*params, s)) continue;
+        if (!measure_region(s)) continue;
         const auto slot =
             static_cast<std::size_t>(found_slots.fetch_add(1, std::memory_order_relaxed));
         if (slot < found.size()) found[slot] = {i, s.blob};  // always (the bound above)
@@ -163,7 +167,21 @@ void GestureSegmenter::Work::measure_regions(RegionScratch& s) {
     }
 }
 
-bool GestureSegmenter::Work::measure_region(const GestureSegmenterParams& p, RegionScratch& s) {
+void GestureSegmenter::Work::share(Part p) {
+    part = p;
+    if (band_count == 2)
+        helper->post(
+            [](void* work) {
+                auto& w = *static_cast<Work*>(work);
+                w.part(w, 1);
+            },
+            this);
+    p(*this, 0);
+    if (band_count == 2) helper->wait();
+}
+
+bool GestureSegmenter::Work::measure_region(RegionScratch& s) {
+    const GestureSegmenterParams& p = *params;
     const int W = small.cols, H = small.rows;
     const double fcx = field.cx, fcy = field.cy, fr = field.r, touch = field.touch;
     // Nearer the rim than `touch` (the field of view's circle or the picture's edge).
@@ -407,15 +425,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     if (!w.band_reduce) detail::reduce_frame(frame, w.reduce, w.small);
     w.frame = &frame;
     w.table = params_.method == GestureSegmentation::kLikelihood ? model_->table().data() : nullptr;
-    if (w.band_count == 2)
-        w.helper->post(
-            [](void* work) {
-                auto& ww = *static_cast<Work*>(work);
-                ww.run_band(ww.bands[1]);
-            },
-            &w);
-    w.run_band(w.bands[0]);
-    if (w.band_count == 2) w.helper->wait();
+    w.share([](Work& ww, int i) { ww.run_band(ww.bands[static_cast<std::size_t>(i)]); });
     std::array<int, 256> hist{};
     for (int i = 0; i < w.band_count; ++i)
         for (const auto& h : w.bands[i].hists)
@@ -476,15 +486,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     w.next_region.store(0, std::memory_order_relaxed);
     w.found_count.store(0, std::memory_order_relaxed);
     w.found_slots.store(0, std::memory_order_relaxed);
-    if (w.band_count == 2)
-        w.helper->post(
-            [](void* work) {
-                auto& ww = *static_cast<Work*>(work);
-                ww.measure_regions(ww.scratch[1]);
-            },
-            &w);
-    w.measure_regions(w.scratch[0]);
-    if (w.band_count == 2) w.helper->wait();
+    w.share([](Work& ww, int i) { ww.measure_regions(ww.scratch[static_cast<std::size_t>(i)]); });
     const auto n_found = std::min(
         w.found.size(), static_cast<std::size_t>(w.found_slots.load(std::memory_order_relaxed)));
     std::sort(w.found.begin(), w.found.begin() + static_cast<std::ptrdiff_t>(n_found),
