@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <condition_variable>
 #include <cstring>
-#include <mutex>
-#include <thread>
+#include <system_error>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -15,6 +13,8 @@
 #endif
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "endotower/app/helper_thread.hpp"
 
 namespace endotower::calibration {
 
@@ -51,28 +51,12 @@ struct Undistorter::Impl {
     std::size_t split_span = 0;
     Kernel kernel = Kernel::kScalar;  // resolved: never kBest
 
-    // The helper thread that remaps the second half (set_threads(2)); started once.
-    struct Helper {
-        std::mutex mutex;
-        std::condition_variable cv;
-        std::thread thread;
-        const hal::Frame* in = nullptr;
-        hal::Frame* out = nullptr;
-        int type = 0;
-        std::uint64_t posted = 0, done = 0;
-        bool quit = false;
-    };
-    std::unique_ptr<Helper> helper;
-
-    ~Impl() {
-        if (!helper) return;
-        {
-            std::lock_guard lock(helper->mutex);
-            helper->quit = true;
-        }
-        helper->cv.notify_all();
-        helper->thread.join();
-    }
+    // The helper thread that remaps the second half (set_threads(2)); started once. The
+    // job's arguments are the frames of the apply() that posted it.
+    std::unique_ptr<app::HelperThread> helper;
+    const hal::Frame* job_in = nullptr;
+    hal::Frame* job_out = nullptr;
+    int job_type = 0;
 };
 
 namespace {
@@ -384,22 +368,11 @@ void remap_part(const Undistorter::Impl& m, int type, const hal::Frame& in, hal:
     }
 }
 
-void helper_loop(Undistorter::Impl& m) {
-    Undistorter::Impl::Helper& h = *m.helper;
-    std::unique_lock lock(h.mutex);
-    for (;;) {
-        h.cv.wait(lock, [&] { return h.quit || h.posted != h.done; });
-        if (h.quit) return;
-        const hal::Frame& in = *h.in;
-        hal::Frame& out = *h.out;
-        const int type = h.type;
-        lock.unlock();
-        remap_part(m, type, in, out, m.split_span, m.spans.size(), m.split_row, in.format.height,
-                   1);
-        lock.lock();
-        h.done = h.posted;
-        h.cv.notify_all();
-    }
+// The helper's half of apply(): the spans from split_span on.
+void remap_second_half(void* impl) {
+    const Undistorter::Impl& m = *static_cast<const Undistorter::Impl*>(impl);
+    remap_part(m, m.job_type, *m.job_in, *m.job_out, m.split_span, m.spans.size(), m.split_row,
+               m.job_in->format.height, 1);
 }
 
 // The runs of remapped pixels for the current nodes (see Impl::nodes). A corrected pixel
@@ -439,19 +412,16 @@ void build_spans(Undistorter::Impl& m, const cv::Mat& fx, const cv::Mat& fy) {
 
 bool Undistorter::set_threads(int threads) {
     if (!impl_ || threads < 1 || threads > 2) return false;
-    if ((threads == 2) == static_cast<bool>(impl_->helper)) return true;
     if (threads == 1) {
-        {
-            std::lock_guard lock(impl_->helper->mutex);
-            impl_->helper->quit = true;
-        }
-        impl_->helper->cv.notify_all();
-        impl_->helper->thread.join();
-        impl_->helper.reset();
+        impl_->helper.reset();  // joins the thread
         return true;
     }
-    impl_->helper = std::make_unique<Impl::Helper>();
-    impl_->helper->thread = std::thread(helper_loop, std::ref(*impl_));
+    if (impl_->helper) return true;
+    try {
+        impl_->helper = std::make_unique<app::HelperThread>();
+    } catch (const std::system_error&) {
+        return false;  // no thread to be had (a process limit): apply() stays on one
+    }
     return true;
 }
 
@@ -671,17 +641,12 @@ bool Undistorter::apply(const hal::Frame& in, hal::Frame& out) const {
     }
     Impl& m = *impl_;
     if (m.helper) {
-        {
-            std::lock_guard lock(m.helper->mutex);
-            m.helper->in = &in;
-            m.helper->out = &out;
-            m.helper->type = type;
-            ++m.helper->posted;
-        }
-        m.helper->cv.notify_all();
+        m.job_in = &in;
+        m.job_out = &out;
+        m.job_type = type;
+        m.helper->post(remap_second_half, &m);
         remap_part(m, type, in, out, 0, m.split_span, 0, m.split_row, 0);
-        std::unique_lock lock(m.helper->mutex);
-        m.helper->cv.wait(lock, [&] { return m.helper->done == m.helper->posted; });
+        m.helper->wait();
     } else {
         remap_part(m, type, in, out, 0, m.spans.size(), 0, in.format.height, 0);
     }

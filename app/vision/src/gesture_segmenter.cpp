@@ -7,9 +7,9 @@
 #include <system_error>
 #include <vector>
 
+#include "endotower/app/helper_thread.hpp"
 #include "endotower/vision/area_mean.hpp"
 #include "endotower/vision/mask_ops.hpp"
-#include "helper_thread.hpp"
 #include "reduce_frame.hpp"
 #include "wide_vectors.hpp"
 
@@ -34,7 +34,7 @@ struct GestureSegmenter::Work {
     bool band_reduce = false;                      // this frame's reduction is the bands'
     const hal::Frame* frame = nullptr;             // the frame the bands reduce
     const std::uint8_t* table = nullptr;           // the tool probability; null: not needed
-    std::unique_ptr<detail::HelperThread> helper;  // band 1, its share of the regions
+    std::unique_ptr<app::HelperThread> helper;     // band 1, its share of the regions
     void run_band(Band& b);
     // part(*this, 1) on the helper (two bands) while the caller runs part(*this, 0).
     using Part = void (*)(Work&, int);
@@ -373,7 +373,7 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
     w.band_count = params_.threads >= 2 && sh >= 2 ? 2 : 1;
     if (w.band_count == 2 && !w.helper) {
         try {
-            w.helper = std::make_unique<detail::HelperThread>();
+            w.helper = std::make_unique<app::HelperThread>();
         } catch (const std::system_error&) {
             w.band_count = 1;  // no thread to be had (a process limit): all on the caller
         }

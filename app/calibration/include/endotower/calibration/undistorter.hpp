@@ -37,6 +37,7 @@ public:
     // thread (started once by set_threads) remaps one while the caller does the other.
     bool apply(const hal::Frame& in, hal::Frame& out) const;
     // 1 (default) or 2 threads for apply(); after init(). Not concurrent with apply().
+    // False for another count, or when no thread can be started (apply() stays on one).
     bool set_threads(int threads);
     int threads() const;
     // The pixel loop: kBest picks the widest this CPU runs (AVX2, else SSE2 on x86-64;

@@ -1,7 +1,7 @@
 // HelperThread (helper_thread.hpp).
-#include "helper_thread.hpp"
+#include "endotower/app/helper_thread.hpp"
 
-namespace endotower::vision::detail {
+namespace endotower::app {
 
 HelperThread::HelperThread() : thread_([this] { loop(); }) {}
 
@@ -46,4 +46,4 @@ void HelperThread::loop() {
     }
 }
 
-}  // namespace endotower::vision::detail
+}  // namespace endotower::app

@@ -1,12 +1,14 @@
 // HelperThread: one thread that runs a job beside its owner, for the per-frame loops
-// that split an image's rows in two (the board has two cores; the analysis thread takes
-// one half, the helper the other: the frame's reduction waits on memory, and two cores
-// fetch it faster than one).
+// that split an image's rows in two (the board has two cores; the calling thread takes
+// one half, the helper the other: the undistortion remap and the gesture segmenter's
+// reduction wait on memory, and two cores fetch it faster than one).
 //
 // post(job, arg) hands the helper `job(arg)`; wait() returns once it has run. One job at
 // a time, posted and waited for by the owner's thread; the job must not throw. The
 // thread starts in the constructor and is joined in the destructor. No allocation and
-// no system call beyond the futex wake-ups per job. Private to app/vision.
+// no system call beyond the futex wake-ups per job. The constructor throws
+// std::system_error when no thread can be started (a process limit); the users catch
+// it and stay on one thread.
 #pragma once
 
 #include <condition_variable>
@@ -14,7 +16,7 @@
 #include <mutex>
 #include <thread>
 
-namespace endotower::vision::detail {
+namespace endotower::app {
 
 class HelperThread {
 public:
@@ -39,4 +41,4 @@ private:
     std::thread thread_;  // last: starts once the members above exist
 };
 
-}  // namespace endotower::vision::detail
+}  // namespace endotower::app
