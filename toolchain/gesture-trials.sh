@@ -3,7 +3,7 @@
 # fig. 3.22 (grasper, scissors) and fig. 3.23 suites at --scale 15 (30 frames = 1.2 s
 # per state), replays them with only the gesture stage on and scores the traces with
 # 'endotower eval'; prints each suite's summary and confusion table.
-# Usage: [SUITES="..."] toolchain/gesture-trials.sh [OUT] [MODEL]
+# Usage: [ENDOTOWER=BINARY] [SUITES="..."] toolchain/gesture-trials.sh [OUT] [MODEL]
 #   SUITES scenarios under board/sim/scenarios, without .yaml (default the three above;
 #          e.g. "gestures/test_random40_double": the random poses, docs/gestures.md)
 #   OUT    work and report folder (default build/gesture-eval)
@@ -12,8 +12,9 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=$(realpath -m "${1:-$root/build/gesture-eval}")
 model=$(realpath "${2:-$root/board/sim/models/gestures.yml}")
-bin=$root/build/release/firmware/endotower
+bin=${ENDOTOWER:-$root/build/release/firmware/endotower}
 [ -x "$bin" ] || "$root/toolchain/build.sh" release
+# Another build's binary (ENDOTOWER) replays the frames already rendered in OUT.
 mkdir -p "$out"
 cat >"$out/board.yaml" <<BOARD
 board: gesture-trials

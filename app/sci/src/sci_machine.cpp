@@ -320,7 +320,11 @@ bool SciMachine::cross_held(const SciFrame& f) {
             cross_still_start_ = r.t_ns;
         }
     }
-    return cross_holding_ && !cross_is_grasp_ && f.gesture_held_ms >= params_.cross_hold_ms &&
+    // It opens on a frame that shows the cross, not inside a dropout: tools that have
+    // parted leave the cross held for up to 200 ms more (docs/sci.md, "On a frame that
+    // shows it").
+    return cross_holding_ && !cross_is_grasp_ && !f.gesture_dropout &&
+           f.gesture_held_ms >= params_.cross_hold_ms &&
            f.t_ns - cross_still_start_ >= ms_to_ns(params_.cross_hold_ms);
 }
 
@@ -397,7 +401,7 @@ void SciMachine::step(const SciFrame& f) {
                              need = ms_to_ns(params_.activation_hold_ms);
             activation_fraction_ =
                 std::min(1.0, static_cast<double>(held) / static_cast<double>(need));
-            if (held >= need) {
+            if (held >= need && !f.gesture_dropout) {  // as the cross: a frame that shows it
                 depth_ = 0;
                 open(MenuId::kMain);
                 event_ = "activate_hold";

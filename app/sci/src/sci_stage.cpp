@@ -97,6 +97,7 @@ void SciStage::process(app::AnalysisContext& ctx) {
         f.gesture_fired = g.fired;
         f.gesture_x = g.tip.x, f.gesture_y = g.tip.y;
         f.tools_touching = g.touching;
+        f.gesture_dropout = g.dropout;
     }
     // The cursor is the surest tool.
     if (f.tool_count == 2 && confidence[1] > confidence[0]) std::swap(f.tools[0], f.tools[1]);

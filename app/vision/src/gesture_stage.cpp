@@ -48,7 +48,11 @@ GestureHold::State GestureHold::update(int label, Point2 where, hal::Nanos t_ns,
     s.label = label_;
     s.where = seen_;
     s.held_ms = static_cast<double>(t_ns - start_ns_) / 1e6;
-    if (!fired_ && s.held_ms >= params_.hold_ms) s.fired = fired_ = true;
+    // It fires on a frame that shows it: a hold whose time runs out inside a dropout
+    // waits for its label to come back, and fires not at all if the tools have parted
+    // (surgery_motion seed 81: a crossing read as a cross for 24 frames, then two tools
+    // again, "fired" 1.0 s after it began, two frames after it was last seen).
+    if (!fired_ && s.held_ms >= params_.hold_ms && label == label_) s.fired = fired_ = true;
     return s;
 }
 
@@ -114,7 +118,8 @@ void GestureStage::process(app::AnalysisContext& ctx) {
                 seen           ? blobs_[which].tip
                 : s.label >= 0 ? s.where
                                : Point2{},
-                touching};
+                touching,
+                s.label >= 0 && !seen};
 
     ctx.trace.begin_object("gesture");
     if (s.label >= 0)

@@ -18,6 +18,7 @@ constexpr int kW = 640, kH = 480;
 struct Driver {
     SciMachine m;
     hal::Nanos t = 0;
+    bool dropout = false;  // the next frames' gesture is held through a dropout
     explicit Driver(SciParams p = {}) : m(p) { m.configure(kW, kH); }
 
     // One frame at time `at` with the cursor at (x, y) (x < 0: no tool).
@@ -32,6 +33,7 @@ struct Driver {
         }
         f.gesture = g, f.gesture_held_ms = held_ms, f.gesture_fired = fired;
         f.gesture_x = x, f.gesture_y = y;
+        f.gesture_dropout = dropout;
         for (auto& e : events) e.time_ns = at;
         f.events = events;
         m.step(f);
@@ -447,6 +449,45 @@ TEST(SciMachine, CrossHeldOneSecondOpensTheQuadrantMenuAndAgainDeactivates) {
     d.frame(d.t + 1000 * kMs, x, y, SciGesture::kCross, 1000);
     EXPECT_EQ(d.event(), "deactivate");
     EXPECT_EQ(d.m.state(), SciState::kInactive);
+}
+
+// A command is taken on a frame that shows its gesture, not in the dropout frames the
+// gesture stage holds it through (GestureFrame::dropout): a crossing read as a cross
+// whose 1 s ran out two frames after the tools parted (surgery_motion seed 81) opens
+// nothing; a cross misread in the frame at 1 s opens the menu in the next; the
+// scissors' 3 s activation likewise.
+TEST(SciMachine, ACommandWaitsForAFrameThatShowsItsGesture) {
+    Driver parted;
+    for (int k = 0; k < 24; ++k) parted.frame(k * 40 * kMs, 320, 240, SciGesture::kCross, k * 40.0);
+    parted.dropout = true;
+    for (int k = 24; k <= 28; ++k)
+        parted.frame(k * 40 * kMs, 320, 240, SciGesture::kCross, k * 40.0);  // to 1.12 s
+    EXPECT_EQ(parted.m.state(), SciState::kInactive);
+    parted.dropout = false;
+    parted.frame(29 * 40 * kMs, 320, 240);  // the hold ended: no gesture
+    for (int k = 30; k < 100; ++k) {
+        parted.frame(k * 40 * kMs, 320, 240);
+        EXPECT_EQ(parted.m.state(), SciState::kInactive) << k;
+    }
+
+    Driver back;
+    for (int k = 0; k < 25; ++k) back.frame(k * 40 * kMs, 320, 240, SciGesture::kCross, k * 40.0);
+    back.dropout = true;
+    back.frame(1000 * kMs, 320, 240, SciGesture::kCross, 1000);
+    EXPECT_EQ(back.m.state(), SciState::kInactive);
+    back.dropout = false;
+    back.frame(1040 * kMs, 320, 240, SciGesture::kCross, 1040);
+    EXPECT_EQ(back.event(), "quadrant");
+
+    Driver scissors;
+    for (int k = 0; k < 75; ++k)
+        scissors.frame(k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
+    scissors.dropout = true;
+    scissors.frame(3000 * kMs, 320, 450, SciGesture::kScissors, 3000);
+    EXPECT_EQ(scissors.m.state(), SciState::kActivating);
+    scissors.dropout = false;
+    scissors.frame(3040 * kMs, 320, 450, SciGesture::kScissors, 3040);
+    EXPECT_EQ(scissors.event(), "activate_hold");
 }
 
 // Two tools crossed (the gesture stage calls "cross" and its hold runs on, since the

@@ -317,6 +317,34 @@ TEST(GestureHold, ALabelInAMinorityOfItsFramesIsNotHeld) {
     EXPECT_TRUE(fired);
 }
 
+// A hold fires on a frame that shows its label. When its time runs out inside a
+// dropout it fires once the label is back (one frame late), and never if the label
+// does not come back (surgery_motion seed 81: a crossing read as a cross from frame
+// 61 to 84, then two separate tools; before, the cross fired at frame 86, when 1 s
+// had passed since frame 61, and only a tracker glitch kept the quadrant menu shut).
+TEST(GestureHold, FiresOnlyOnAFrameThatShowsIt) {
+    const hal::Nanos frame = 40'000'000;  // 25 fps
+    GestureHold back({1000.0, 0.03, 200.0});
+    int fired_at = -1;
+    for (int i = 0; i < 40; ++i) {
+        const GestureHold::State s = back.update(i == 25 ? -1 : 4, {100.0, 50.0}, i * frame, 5.0);
+        EXPECT_EQ(s.label, 4) << i;
+        EXPECT_DOUBLE_EQ(s.held_ms, 40.0 * i) << i;
+        if (s.fired) {
+            EXPECT_EQ(fired_at, -1) << "fires only once per hold";
+            fired_at = i;
+        }
+    }
+    EXPECT_EQ(fired_at, 26);  // 1040 ms: frame 25 did not show it
+    GestureHold parted({1000.0, 0.03, 200.0});
+    for (int i = 0; i < 40; ++i) {
+        const GestureHold::State s =
+            parted.update(i >= 1 && i <= 24 ? 4 : -1, {100.0, 50.0}, i * frame, 5.0);
+        EXPECT_FALSE(s.fired) << i;
+        EXPECT_EQ(s.label, i >= 1 && i <= 29 ? 4 : -1) << i;  // held through 200 ms of none
+    }
+}
+
 namespace {
 
 // Seven separable clusters in feature space, with a deterministic spread.

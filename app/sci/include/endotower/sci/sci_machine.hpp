@@ -74,6 +74,7 @@ struct SciFrame {
     bool gesture_fired = false;  // the frame the hold reached the gesture stage's hold time
     double gesture_x = 0, gesture_y = 0;  // the gesture's tip, px
     bool tools_touching = false;          // a region holds two tools (GestureFrame::touching)
+    bool gesture_dropout = false;         // the held gesture is not this frame's own (GestureHold)
     std::span<const hal::ControlEvent> events;
 };
 

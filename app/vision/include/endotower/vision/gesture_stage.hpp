@@ -23,14 +23,14 @@
 // near it, none.
 // GestureHold: a gesture fires once, when the same label has been held for
 // `hold_ms` (1000) with its tip within `still_fraction` (0.03) x frame width of where
-// the hold began; moving starts a new hold. Another label (or none) for at most
-// `dropout_ms` (200) is a misclassified frame or two and the hold goes on; longer, and
-// the new label's hold is taken to have begun where it first appeared (so a real
-// change is not delayed). A hold counts only while at least `min_support` (0.5) of its
-// frames show its label: below that the frame reports no gesture and nothing fires (a
-// label that flickers in one frame of four, each gap under `dropout_ms`, is not held;
-// docs/gestures.md "Support"). Times are the frames' capture times (exact on the
-// virtual clock).
+// the hold began, on a frame that shows it; moving starts a new hold. Another label
+// (or none) for at most `dropout_ms` (200) is a misclassified frame or two and the hold
+// goes on; longer, and the new label's hold is taken to have begun where it first
+// appeared (so a real change is not delayed). A hold counts only while at least
+// `min_support` (0.5) of its frames show its label: below that the frame reports no
+// gesture and nothing fires (a label that flickers in one frame of four, each gap
+// under `dropout_ms`, is not held; docs/gestures.md "Support"). Times are the frames'
+// capture times (exact on the virtual clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
 //               "tools": [{"label", "confidence", "entries", "arms", "thin_arms",
@@ -92,13 +92,14 @@ struct GestureStageParams {
 
 // One frame's gesture: label -1 = none; tip where the gesture's region is (px);
 // touching: some region enters the image twice (two tools against each other), whatever
-// it reads as.
+// it reads as; dropout: the held label is not this frame's own (GestureHold's dropout).
 struct GestureFrame {
     int label = -1;
     double confidence = 0, held_ms = 0;
     bool fired = false;
     Point2 tip;
     bool touching = false;
+    bool dropout = false;
 };
 
 class GestureStage final : public app::AnalysisStage {
