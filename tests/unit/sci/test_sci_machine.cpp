@@ -470,24 +470,25 @@ TEST(SciMachine, ACommandWaitsForAFrameThatShowsItsGesture) {
         EXPECT_EQ(parted.m.state(), SciState::kInactive) << k;
     }
 
-    Driver back;
-    for (int k = 0; k < 25; ++k) back.frame(k * 40 * kMs, 320, 240, SciGesture::kCross, k * 40.0);
-    back.dropout = true;
-    back.frame(1000 * kMs, 320, 240, SciGesture::kCross, 1000);
-    EXPECT_EQ(back.m.state(), SciState::kInactive);
-    back.dropout = false;
-    back.frame(1040 * kMs, 320, 240, SciGesture::kCross, 1040);
-    EXPECT_EQ(back.event(), "quadrant");
-
-    Driver scissors;
-    for (int k = 0; k < 75; ++k)
-        scissors.frame(k * 40 * kMs, 320, 450, SciGesture::kScissors, k * 40.0);
-    scissors.dropout = true;
-    scissors.frame(3000 * kMs, 320, 450, SciGesture::kScissors, 3000);
-    EXPECT_EQ(scissors.m.state(), SciState::kActivating);
-    scissors.dropout = false;
-    scissors.frame(3040 * kMs, 320, 450, SciGesture::kScissors, 3040);
-    EXPECT_EQ(scissors.event(), "activate_hold");
+    // Held still at (320, y) for `frames` frames, misread in the next (the hold time),
+    // shown again in the one after: the state after the misread frame, the last event.
+    const auto misread_at_the_hold_time = [](SciGesture g, double y, int frames) {
+        Driver d;
+        for (int k = 0; k < frames; ++k) d.frame(k * 40 * kMs, 320, y, g, k * 40.0);
+        d.dropout = true;
+        d.frame(frames * 40 * kMs, 320, y, g, frames * 40.0);
+        const SciState misread = d.m.state();
+        d.dropout = false;
+        d.frame((frames + 1) * 40 * kMs, 320, y, g, (frames + 1) * 40.0);
+        return std::pair{misread, d.event()};
+    };
+    const auto [cross_misread, cross_event] = misread_at_the_hold_time(SciGesture::kCross, 240, 25);
+    EXPECT_EQ(cross_misread, SciState::kInactive);  // 1.0 s, misread
+    EXPECT_EQ(cross_event, "quadrant");             // 1.04 s
+    const auto [scissors_misread, scissors_event] =
+        misread_at_the_hold_time(SciGesture::kScissors, 450, 75);
+    EXPECT_EQ(scissors_misread, SciState::kActivating);  // 3.0 s, misread
+    EXPECT_EQ(scissors_event, "activate_hold");          // 3.04 s
 }
 
 // Two tools crossed (the gesture stage calls "cross" and its hold runs on, since the
