@@ -91,15 +91,15 @@ long allocations_per_frame(ToolTracker& tracker, int warm, int frames, int w = 6
     std::array<ToolEstimate, ToolTracker::kMaxTools> out{};
     for (int t = 0; t < warm; ++t)
         tracker.track(test::frame_of(imgs[static_cast<std::size_t>(t)]), out);
-    test::set_counting(true);
+    endotower::test::set_counting(true);
     for (int t = warm; t < warm + frames; ++t)
         tracker.track(test::frame_of(imgs[static_cast<std::size_t>(t)]), out);
-    test::set_counting(false);
+    endotower::test::set_counting(false);
     // OpenCV's own scratch buffers (Canny, filters) are not ours to remove; shown for the record.
     std::printf("%s: %ld operator new, %ld C allocations (OpenCV internals) in %d frames\n",
-                std::string(tracker.name()).c_str(), test::heap_allocations(),
-                test::c_allocations(), frames);
-    return test::heap_allocations();
+                std::string(tracker.name()).c_str(), endotower::test::heap_allocations(),
+                endotower::test::c_allocations(), frames);
+    return endotower::test::heap_allocations();
 }
 
 std::size_t track_still(ToolTracker& tracker, const cv::Scalar& colour, int frames) {

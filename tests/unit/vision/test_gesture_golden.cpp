@@ -18,23 +18,18 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <string>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <vector>
 
 #include "endotower/scene/renderer.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
 #include "endotower/vision/gesture_segmenter.hpp"
 #include "gesture_golden_table.hpp"
+#include "heap_counter.hpp"
 
 using namespace endotower;
 using namespace endotower::vision;
-
-namespace endotower::vision::test {  // heap_counter.cpp
-long heap_allocations();
-long c_allocations();
-void set_counting(bool on);
-}  // namespace endotower::vision::test
 
 namespace {
 

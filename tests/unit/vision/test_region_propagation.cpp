@@ -421,16 +421,18 @@ TEST(RegionPropagation, SteadyStateFramesAllocateNothing) {
         std::array<RegionEstimate, 1> out{};
         for (std::uint64_t i = 1; i < 5; ++i) tracker.track(view(frames[i], i), out);
         int propagated = 0;
-        test::set_counting(true);
+        endotower::test::set_counting(true);
         for (std::uint64_t i = 5; i < frames.size(); ++i) {
             tracker.track(view(frames[i], i), out);
             propagated += out[0].state == RegionState::kTracked && !out[0].keyframe_match;
         }
-        test::set_counting(false);
+        endotower::test::set_counting(false);
         EXPECT_EQ(propagated, 35) << size;
-        if (test::heap_allocations() < 0) GTEST_SKIP() << "not counted under a sanitizer";
-        EXPECT_EQ(test::heap_allocations(), 0) << size << ": operator new in 35 frames";
-        EXPECT_EQ(test::c_allocations(), 0) << size << ": C allocator calls in 35 frames";
+        if (endotower::test::heap_allocations() < 0)
+            GTEST_SKIP() << "not counted under a sanitizer";
+        EXPECT_EQ(endotower::test::heap_allocations(), 0) << size << ": operator new in 35 frames";
+        EXPECT_EQ(endotower::test::c_allocations(), 0)
+            << size << ": C allocator calls in 35 frames";
     }
 }
 
@@ -439,12 +441,12 @@ TEST(RegionPropagation, RansacAllocatesNothing) {
     RansacHomography r;
     cv::Matx33d h;
     std::vector<std::uint8_t> mask(p.from.size());
-    test::set_counting(true);
+    endotower::test::set_counting(true);
     const bool ok = r.fit(p.from, p.to, h, mask);
-    test::set_counting(false);
+    endotower::test::set_counting(false);
     EXPECT_TRUE(ok);
-    if (test::heap_allocations() < 0) GTEST_SKIP() << "not counted under a sanitizer";
-    EXPECT_EQ(test::c_allocations(), 0);
+    if (endotower::test::heap_allocations() < 0) GTEST_SKIP() << "not counted under a sanitizer";
+    EXPECT_EQ(endotower::test::c_allocations(), 0);
 }
 
 }  // namespace

@@ -1,5 +1,11 @@
-// Interposes glibc's malloc family over its __libc_ entry points and replaces operator
-// new (which then allocates through __libc_malloc, so each allocation counts once).
+// Counts heap allocations of the whole process, separately: operator new (C++
+// allocations, the project's rule) and the C allocator (OpenCV's internal buffers
+// come from posix_memalign), by replacing operator new and interposing glibc's malloc
+// family over its __libc_ entry points. Linked into the vision tests that count
+// (test_vision, test_gesture_golden, test_region_propagation, test_book_trackers) and
+// test_mjpeg.
+// Under ASan/TSan the sanitizer owns malloc: the C allocator is not interposed there
+// and neither is operator new: both counts read -1 (the tests then do not assert them).
 #include "heap_counter.hpp"
 
 #include <atomic>
@@ -19,24 +25,6 @@
 #define ENDOTOWER_SANITIZED 0
 #endif
 
-namespace {
-std::atomic<long> g_count{0};
-std::atomic<bool> g_on{false};
-[[maybe_unused]] void note() {
-    if (g_on.load(std::memory_order_relaxed)) g_count.fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-namespace endotower::v4l2::test {
-void set_counting(bool on) {
-    if (on) g_count = 0;
-    g_on = on;
-}
-long heap_allocations() {
-    return ENDOTOWER_SANITIZED ? -1 : g_count.load();
-}
-}  // namespace endotower::v4l2::test
-
 #if !ENDOTOWER_SANITIZED
 extern "C" {
 // glibc's own entry points, which the interposed functions forward to.
@@ -46,7 +34,41 @@ void* __libc_calloc(std::size_t, std::size_t);
 void* __libc_realloc(void*, std::size_t);
 void* __libc_memalign(std::size_t, std::size_t);
 // NOLINTEND(bugprone-reserved-identifier)
+}
+#endif
 
+namespace {
+std::atomic<long> g_count{0}, g_new_count{0};
+std::atomic<bool> g_on{false};
+[[maybe_unused]] void note() {
+    if (g_on.load(std::memory_order_relaxed)) g_count.fetch_add(1, std::memory_order_relaxed);
+}
+[[maybe_unused]] void* counted_new(std::size_t n) {
+    if (g_on.load(std::memory_order_relaxed)) g_new_count.fetch_add(1, std::memory_order_relaxed);
+#if ENDOTOWER_SANITIZED
+    if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+#else
+    if (void* p = __libc_malloc(n == 0 ? 1 : n)) return p;
+#endif
+    throw std::bad_alloc();
+}
+}  // namespace
+
+namespace endotower::test {
+long heap_allocations() {
+    return ENDOTOWER_SANITIZED ? -1 : g_new_count.load();
+}
+long c_allocations() {
+    return ENDOTOWER_SANITIZED ? -1 : g_count.load();
+}
+void set_counting(bool on) {
+    if (on) g_count = g_new_count = 0;
+    g_on = on;
+}
+}  // namespace endotower::test
+
+#if !ENDOTOWER_SANITIZED
+extern "C" {
 void* malloc(std::size_t n) {
     note();
     return __libc_malloc(n);
@@ -75,14 +97,9 @@ void* memalign(std::size_t align, std::size_t n) {
     return __libc_memalign(align, n);
 }
 }
+#endif
 
-namespace {
-void* counted_new(std::size_t n) {
-    note();
-    if (void* p = __libc_malloc(n == 0 ? 1 : n)) return p;
-    throw std::bad_alloc();
-}
-}  // namespace
+#if !ENDOTOWER_SANITIZED
 void* operator new(std::size_t n) {
     return counted_new(n);
 }
