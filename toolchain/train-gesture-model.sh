@@ -14,7 +14,8 @@
 # held-out test sets (docs/gestures.md).
 # Deterministic: same bytes every run.
 # Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended|topology|profile]
-#        [--segmentation likelihood|morphology] [--test DIR]...  (default: the shipped model)
+#        [--segmentation likelihood|morphology] [--threshold N] [--test DIR]...
+#        (default: the shipped model)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$root/board/sim/models/gestures.yml}
@@ -23,6 +24,13 @@ shift || true
 case " $* " in
   *" --features "*) ;;
   *) set -- --features profile "$@" ;;
+esac
+# The shipped model's mask threshold (likelihood segmentation; stored in the model)
+# unless the caller names one: 170, where 128 (even odds) let the wet tissue's sheen
+# join the jaws (docs/gestures.md, "The mask threshold").
+case " $* " in
+  *" --threshold "* | *" morphology "*) ;;
+  *) set -- --threshold 170 "$@" ;;
 esac
 bin=$root/build/release/firmware/endotower
 [ -x "$bin" ] || "$root/toolchain/build.sh" release

@@ -296,6 +296,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
     }
     vision::GestureSegmenterParams gesture_seg;
     gesture_seg.method = p.gesture_classifier.segmentation();
+    gesture_seg.threshold = p.gesture_classifier.segmentation_threshold();
     gesture_seg.profile = p.gesture_classifier.features() == vision::GestureFeatureSet::kProfile;
     p.gesture_segmenter.emplace(&p.gesture_tool_model, gesture_seg);
     vision::GestureStageParams gesture_params;

@@ -19,7 +19,8 @@ void print_help() {
         "                                [--features book|extended|topology|profile]\n"
         "                                [--segmentation "
         "likelihood|morphology]\n"
-        "                                [--tool-model FILE] [--every N] [--hidden N] "
+        "                                [--threshold N] [--tool-model FILE] [--every N]\n"
+        "                                [--hidden N] "
         "[--iterations N]\n"
         "                                [--networks one|two] [--rprop] [--match-widths N]\n"
         "                                [--two-tool-only-from MODEL]\n"
@@ -39,6 +40,9 @@ void print_help() {
         "                     on those eleven and the width and runs across the shaft at\n"
         "                     10 stations back from the tip, averaged for single tools\n"
         "  --segmentation S   likelihood (default) or morphology (eq. 3.3-3.5)\n"
+        "  --threshold N      likelihood segmentation: the mask threshold on the smoothed tool\n"
+        "                     probability, 1..255 (default 128 = even odds; stored in the\n"
+        "                     model, so the firmware segments the same way)\n"
         "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
         "  --every N          use every N-th frame (default 1)\n"
         "  --hidden N         hidden units (default 20)\n"
@@ -120,7 +124,7 @@ int run_train_gestures_command(const Args& args) {
     std::string out, tool_model_path, model_path, base_path;
     vision::GestureTrainParams params;
     params.features = vision::GestureFeatureSet::kTopology;
-    long every = 1, hidden = 20, iterations = 3000, match_widths = 2;
+    long every = 1, hidden = 20, iterations = 3000, match_widths = 2, threshold = 0;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& k = args[i];
         if (k == "--help" || k == "-h") {
@@ -163,6 +167,9 @@ int run_train_gestures_command(const Args& args) {
                                    "'");
             params.segmentation = v == "morphology" ? vision::GestureSegmentation::kMorphology
                                                     : vision::GestureSegmentation::kLikelihood;
+        } else if (k == "--threshold") {
+            if (!whole(v, 1, 255, threshold))
+                return usage_error("--threshold needs a whole number in 1..255, got '" + v + "'");
         } else if (k == "--every") {
             if (!whole(v, 1, 100000, every))
                 return usage_error("--every needs a whole number >= 1, got '" + v + "'");
@@ -193,6 +200,7 @@ int run_train_gestures_command(const Args& args) {
         if (!classifier.load(model_path, error)) return usage_error(error);
         params.features = classifier.features();
         params.segmentation = classifier.segmentation();
+        params.threshold = classifier.segmentation_threshold();
     } else {
         if (out.empty()) return usage_error("give --out FILE");
         if (scenes.empty()) return usage_error("give at least one --scene DIR");
@@ -208,7 +216,18 @@ int run_train_gestures_command(const Args& args) {
             return usage_error(base_path + ": has no two-tool network (--networks two)");
         params.features = classifier.features();
         params.segmentation = classifier.segmentation();
+        params.threshold = classifier.segmentation_threshold();
         params.two_tool_network = true;
+    }
+    // A model segments with the threshold it was trained with: one given must agree.
+    if (threshold != 0) {
+        if (params.segmentation != vision::GestureSegmentation::kLikelihood)
+            return usage_error("--threshold is for likelihood segmentation");
+        if ((!model_path.empty() || !base_path.empty()) && threshold != params.threshold)
+            return usage_error("--threshold " + std::to_string(threshold) + ": the model " +
+                               (model_path.empty() ? base_path : model_path) +
+                               " was trained with threshold " + std::to_string(params.threshold));
+        params.threshold = static_cast<int>(threshold);
     }
     params.hidden = static_cast<int>(hidden);
     params.iterations = static_cast<int>(iterations);
@@ -220,6 +239,7 @@ int run_train_gestures_command(const Args& args) {
     }
     vision::GestureSegmenterParams seg_params;
     seg_params.method = params.segmentation;
+    seg_params.threshold = params.threshold;
     seg_params.profile = params.features == vision::GestureFeatureSet::kProfile;
     vision::GestureSegmenter segmenter(&tool_model, seg_params);
 

@@ -56,6 +56,7 @@ struct GestureFrames {
         }
         vision::GestureSegmenterParams p;
         p.method = classifier.segmentation();
+        p.threshold = classifier.segmentation_threshold();
         p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
         p.threads = threads;
         segmenter = std::make_unique<vision::GestureSegmenter>(&tool_model, p);

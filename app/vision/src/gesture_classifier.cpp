@@ -17,6 +17,7 @@ constexpr const char* kMagic = "ETGES1\n";
 constexpr const char* kNode = "opencv_ml_ann_mlp";
 constexpr const char* kTwoToolNode = "two_tool_ann_mlp";
 constexpr const char* kProfileNode = "profile_ann_mlp";
+constexpr int kDefaultThreshold = GestureSegmenterParams{}.threshold;  // even odds
 
 std::uint64_t fnv1a(const char* p, std::size_t n) {
     std::uint64_t h = 1469598103934665603ull;
@@ -187,6 +188,7 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
     net_->profile = profile;
     features_ = params.features;
     segmentation_ = params.segmentation;
+    threshold_ = params.threshold;
     return true;
 }
 
@@ -196,7 +198,8 @@ bool GestureClassifier::retrain_two_tool(const std::vector<GestureSample>& sampl
         error = "the model has no two-tool network to retrain";
         return false;
     }
-    if (params.features != features_ || params.segmentation != segmentation_) {
+    if (params.features != features_ || params.segmentation != segmentation_ ||
+        params.threshold != threshold_) {
         error = "the samples' features or segmentation are not the model's";
         return false;
     }
@@ -269,7 +272,11 @@ GestureResult GestureClassifier::classify(const GestureFeatures& f, int entries)
 std::string GestureClassifier::serialise() const {
     std::string body = kMagic;
     body += std::string("features ") + feature_name(features_) + "\n";
-    body += std::string("segmentation ") + segmentation_name(segmentation_) + "\n";
+    body += std::string("segmentation ") + segmentation_name(segmentation_);
+    // The default threshold is not written: the files written before it existed read the same.
+    if (segmentation_ == GestureSegmentation::kLikelihood && threshold_ != kDefaultThreshold)
+        body += " threshold " + std::to_string(threshold_);
+    body += "\n";
     if (trained()) {
         cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
                                        cv::FileStorage::FORMAT_YAML);
@@ -324,6 +331,19 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     in >> key >> segmentation;
     if (key != "segmentation" || (segmentation != "morphology" && segmentation != "likelihood"))
         return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
+    std::string rest;
+    std::getline(in, rest);
+    int threshold = kDefaultThreshold;
+    if (!rest.empty()) {
+        std::istringstream r(rest);
+        std::string word, extra;
+        long n = 0;
+        if (segmentation != "likelihood" || !(r >> word >> n) || word != "threshold" || n < 1 ||
+            n > 255 || (r >> extra))
+            return fail("line 3: expected 'segmentation likelihood threshold N' (1..255) after '" +
+                        segmentation + "', got '" + rest + "'");
+        threshold = static_cast<int>(n);
+    }
     const GestureFeatureSet fs_set = features == "book"       ? GestureFeatureSet::kBook
                                      : features == "extended" ? GestureFeatureSet::kExtended
                                      : features == "topology" ? GestureFeatureSet::kTopology
@@ -383,6 +403,7 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     features_ = fs_set;
     segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology
                                                  : GestureSegmentation::kLikelihood;
+    threshold_ = threshold;
     return true;
 }
 

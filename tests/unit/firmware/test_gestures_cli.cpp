@@ -14,7 +14,9 @@
 
 #include "endotower/eval/truth.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
+#include "endotower/vision/gesture_segmenter.hpp"
 #include "gesture_dataset.hpp"
+#include "gesture_model_edit.hpp"
 
 namespace fs = std::filesystem;
 using namespace endotower;
@@ -70,6 +72,7 @@ protected:
         EXPECT_TRUE(classifier.load(kModels + "gestures.yml", error)) << error;
         vision::GestureSegmenterParams p;
         p.method = classifier.segmentation();
+        p.threshold = classifier.segmentation_threshold();
         p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
         vision::GestureSegmenter segmenter(&tool_model, p);
         std::vector<vision::GestureSample> samples;
@@ -135,6 +138,21 @@ TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
                   train.string()),
               2);
     EXPECT_NE(slurp(dir() / "out.err").find("absent.yml"), std::string::npos);
+    // The model segments with the threshold it was trained with (128 here, the default).
+    EXPECT_EQ(run("train-gestures --model " + model.string() + " --threshold 170 --tool-model " +
+                  kModels + "tool_likelihood.bin --test " + train.string()),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err")
+                  .find("--threshold 170: the model " + model.string() +
+                        " was trained with threshold 128"),
+              std::string::npos)
+        << slurp(dir() / "out.err");
+    EXPECT_EQ(run("train-gestures --scene " + train.string() + " --threshold 256 --out " +
+                  model.string() + " --tool-model " + kModels + "tool_likelihood.bin"),
+              2);
+    EXPECT_NE(
+        slurp(dir() / "out.err").find("--threshold needs a whole number in 1..255, got '256'"),
+        std::string::npos);
     vision::GestureClassifier c;
     std::string error;
     ASSERT_TRUE(c.load(model.string(), error)) << error;
@@ -254,6 +272,77 @@ TEST_F(Gestures, CorruptPixelModelDisablesGesturesNotTheVideo) {
     EXPECT_EQ(slurp(trace).find("\"gesture\""), std::string::npos);
     EXPECT_NE(slurp(dir() / "out.txt").find("28 frames in, 28 out"), std::string::npos)
         << slurp(dir() / "out.txt");
+}
+
+// The firmware segments with the threshold stored in the model: `sim`'s traced regions
+// (count and tips, every frame) are those of the segmenter run here at that threshold,
+// for the shipped networks stored once with threshold 128 and once with 200 (which
+// give different regions here: checked, so the comparison can tell them apart).
+TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
+    const fs::path rec = scene("fig322_grasper_orientations.yaml");
+    const std::string shipped = slurp(kModels + "gestures.yml");
+    const std::size_t line = shipped.find("segmentation likelihood");
+    ASSERT_NE(line, std::string::npos);
+    const std::string third = shipped.substr(line, shipped.find('\n', line) - line);
+    vision::ToolLikelihood pixels;
+    std::string error;
+    ASSERT_TRUE(pixels.load(kModels + "gesture_tool_likelihood.bin", error)) << error;
+    std::vector<std::vector<std::array<double, 2>>> tips_at[2];
+    for (const int threshold : {128, 200}) {
+        const std::string name = "t" + std::to_string(threshold);
+        const fs::path model = dir() / (name + ".yml");
+        std::ofstream(model) << test::edited_gesture_model(
+            shipped, third,
+            threshold == 128 ? "segmentation likelihood"
+                             : "segmentation likelihood threshold " + std::to_string(threshold));
+        vision::GestureClassifier classifier;
+        ASSERT_TRUE(classifier.load(model.string(), error)) << error;
+        ASSERT_EQ(classifier.segmentation_threshold(), threshold);
+        const fs::path trace = dir() / (name + "_trace.jsonl");
+        const fs::path b = dir() / ("board_" + name);
+        fs::create_directories(b);
+        ASSERT_EQ(run("sim --board " + board(b, model.string(), 1000).string() + " --input " +
+                      (rec / "frames").string() + " --trace " + trace.string() + " --out " +
+                      (dir() / (name + ".mkv")).string()),
+                  0)
+            << slurp(dir() / "out.err");
+        vision::GestureSegmenterParams p;
+        p.threshold = threshold;
+        p.profile = true;
+        vision::GestureSegmenter segmenter(&pixels, p);
+        std::ifstream lines(trace);
+        std::string l;
+        auto& tips = tips_at[threshold == 128 ? 0 : 1];
+        for (int frame = 0; std::getline(lines, l); ++frame) {
+            char png[32];
+            std::snprintf(png, sizeof png, "%06d.png", frame);
+            cv::Mat img = cv::imread((rec / "frames" / png).string(), cv::IMREAD_COLOR);
+            ASSERT_FALSE(img.empty()) << png;
+            hal::Frame f;
+            f.format = {img.cols, img.rows, static_cast<int>(img.step), hal::PixelFormat::kBgr24};
+            f.data = img.data;
+            if (frame == 0) segmenter.configure(f.format);
+            std::array<vision::GestureBlob, vision::GestureSegmenter::kMaxBlobs> blobs{};
+            const std::size_t n = segmenter.segment(f, blobs);
+            tips.emplace_back();
+            std::size_t from = l.find("\"tools\":[");
+            ASSERT_NE(from, std::string::npos) << l;
+            for (std::size_t i = 0; i < n; ++i) {
+                tips.back().push_back({blobs[i].tip.x, blobs[i].tip.y});
+                from = l.find("\"tip_px\":[", from);
+                ASSERT_NE(from, std::string::npos) << name << " frame " << frame << ": " << l;
+                double x = 0, y = 0;
+                ASSERT_EQ(std::sscanf(l.c_str() + from, "\"tip_px\":[%lf,%lf]", &x, &y), 2);
+                EXPECT_NEAR(x, blobs[i].tip.x, 1e-6) << name << " frame " << frame;
+                EXPECT_NEAR(y, blobs[i].tip.y, 1e-6) << name << " frame " << frame;
+                ++from;
+            }
+            EXPECT_EQ(l.find("\"tip_px\":[", from), std::string::npos)
+                << name << " frame " << frame << ": more regions traced than " << n;
+        }
+        EXPECT_EQ(tips.size(), 28u);
+    }
+    EXPECT_NE(tips_at[0], tips_at[1]);
 }
 
 TEST_F(Gestures, EvalConfusionOnARenderedSuite) {

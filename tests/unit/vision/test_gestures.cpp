@@ -11,6 +11,7 @@
 #include "endotower/vision/gesture_features.hpp"
 #include "endotower/vision/gesture_segmenter.hpp"
 #include "endotower/vision/gesture_stage.hpp"
+#include "gesture_model_edit.hpp"
 
 using namespace endotower;
 using namespace endotower::vision;
@@ -386,6 +387,15 @@ int expect_same_calls(const GestureClassifier& a, const GestureClassifier& b,
     return compared;
 }
 
+// `model` with the first `from` replaced by `to`, signed again: a consistent file with
+// an edited body.
+std::string edited_model(const std::string& model, const std::string& from, const std::string& to) {
+    bool replaced = false;
+    std::string out = test::edited_gesture_model(model, from, to, &replaced);
+    EXPECT_TRUE(replaced) << from;
+    return out;
+}
+
 }  // namespace
 
 TEST(GestureClassifier, LearnsSeparableClassesAndTheModelFileRoundTrips) {
@@ -436,21 +446,10 @@ TEST(GestureClassifier, CorruptOrWrongModelFilesAreRefused) {
     EXPECT_FALSE(r.parse("", "m.yml", error));
 
     // Consistent files (re-signed the way serialise() signs) whose network is wrong.
-    const std::string good_body = good.substr(0, good.size() - 23);
-    auto signed_model = [](const std::string& body) {
-        std::uint64_t h = 1469598103934665603ull;
-        for (char ch : body) h = (h ^ static_cast<std::uint8_t>(ch)) * 1099511628211ull;
-        char tail[32];
-        std::snprintf(tail, sizeof tail, "fnv1a %016llx\n", static_cast<unsigned long long>(h));
-        return body + tail;
-    };
     auto edited = [&](const std::string& from, const std::string& to) {
-        std::string body = good_body;
-        const std::size_t at = body.find(from);
-        EXPECT_NE(at, std::string::npos) << from;
-        return signed_model(at == std::string::npos ? body : body.replace(at, from.size(), to));
+        return edited_model(good, from, to);
     };
-    ASSERT_TRUE(GestureClassifier().parse(signed_model(good_body), "m.yml", error)) << error;
+    ASSERT_TRUE(GestureClassifier().parse(edited("", ""), "m.yml", error)) << error;
     // 9 inputs labelled "book" (6) and "topology" (11).
     EXPECT_FALSE(r.parse(edited("features extended", "features book"), "m.yml", error));
     EXPECT_NE(error.find("not 6-N-7"), std::string::npos) << error;
@@ -474,6 +473,57 @@ TEST(GestureClassifier, CorruptOrWrongModelFilesAreRefused) {
     EXPECT_FALSE(r.load("/nonexistent/gestures.yml", error));
     EXPECT_NE(error.find("/nonexistent/gestures.yml: cannot open"), std::string::npos);
     EXPECT_FALSE(r.trained());
+}
+
+// The likelihood segmentation's mask threshold is part of the model: written when it is
+// not the default (so a default model's bytes are those of the files written before
+// the threshold was stored), read back, and refused when malformed.
+TEST(GestureClassifier, TheSegmentationThresholdTravelsWithTheModel) {
+    const auto samples = synthetic_samples(4);
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kExtended;
+    p.iterations = 200;
+    std::string error;
+    GestureClassifier plain, raised;
+    ASSERT_TRUE(plain.train(samples, p, error)) << error;
+    p.threshold = 170;
+    ASSERT_TRUE(raised.train(samples, p, error)) << error;
+    EXPECT_EQ(plain.segmentation_threshold(), 128);
+    EXPECT_EQ(raised.segmentation_threshold(), 170);
+    const std::string a = plain.serialise(), b = raised.serialise();
+    EXPECT_NE(a.find("ETGES1\nfeatures extended\nsegmentation likelihood\n%YAML"),
+              std::string::npos);
+    EXPECT_NE(b.find("ETGES1\nfeatures extended\nsegmentation likelihood threshold 170\n%YAML"),
+              std::string::npos);
+    GestureClassifier back;
+    ASSERT_TRUE(back.parse(b, "m.yml", error)) << error;
+    EXPECT_EQ(back.segmentation_threshold(), 170);
+    EXPECT_EQ(back.serialise(), b);
+    ASSERT_TRUE(back.parse(a, "m.yml", error)) << error;
+    EXPECT_EQ(back.segmentation_threshold(), 128);
+    EXPECT_EQ(back.serialise(), a);
+    // The two-tool network is retrained only with the model's own threshold.
+    p.two_tool_network = true;
+    p.threshold = 128;
+    GestureClassifier two;
+    ASSERT_TRUE(two.train(samples, p, error)) << error;
+    p.threshold = 170;
+    EXPECT_FALSE(two.retrain_two_tool(samples, p, error));
+    EXPECT_NE(error.find("not the model's"), std::string::npos) << error;
+
+    const std::string line = "segmentation likelihood threshold 170";
+    for (const char* bad :
+         {"segmentation likelihood threshold 0", "segmentation likelihood threshold 256",
+          "segmentation likelihood threshold x", "segmentation likelihood threshold 170 1",
+          "segmentation likelihood limit 170", "segmentation morphology threshold 170"}) {
+        GestureClassifier r;
+        EXPECT_FALSE(r.parse(edited_model(b, line, bad), "m.yml", error)) << bad;
+        EXPECT_NE(error.find("m.yml: line 3: expected 'segmentation likelihood threshold N' "
+                             "(1..255)"),
+                  std::string::npos)
+            << error;
+        EXPECT_FALSE(r.trained());
+    }
 }
 
 // The topology features: 11 inputs (the holes among them), the eighth class, two

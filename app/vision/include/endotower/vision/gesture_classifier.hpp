@@ -13,7 +13,8 @@
 // features, 11-20-8 (the holes tell cross, triangle and double triangle apart);
 // kProfile (shipped) = a topology model and a third network, 31-20-8, on those eleven
 // and the profile across the shaft (GestureFeatures), whose outputs are averaged with
-// the single-tool network's. The segmentation method the model was trained on is
+// the single-tool network's. The segmentation method the model was trained on, and for
+// the likelihood method its mask threshold (`threshold`, default 128 = even odds), are
 // stored with it, so the firmware segments the same way.
 //
 // Two networks (`two_tool_network`, extended, topology or profile): a region with two rim
@@ -28,16 +29,18 @@
 // networks").
 //
 // File: "ETGES1\n", "features book|extended|topology|profile\n",
-// "segmentation morphology|likelihood\n", the network as OpenCV FileStorage YAML (node
-// opencv_ml_ann_mlp; the two-tool network, when there is one, node two_tool_ann_mlp;
-// the profile network, with the profile features only and then required, profile_ann_mlp),
-// then "fnv1a " and the FNV-1a 64-bit hash of everything before it as 16 hex digits and
-// "\n" (the same non-standard offset basis as tool_likelihood.hpp's). parse()/load() refuse another
-// header, a hash mismatch, or a network that is not features-hidden-classes, with a message naming
-// the file (the network must be 6-N-7, 9-N-8 or 11-N-8, the profile network 31-N-8,
-// 2 <= N <= kGestureMaxHidden, every list as long as the layers make it). serialise() gives the
-// bytes (the caller writes them atomically). classify() is for the per-frame path: no exceptions,
-// no allocation.
+// "segmentation morphology|likelihood\n" (likelihood with a threshold other than 128:
+// "segmentation likelihood threshold N\n", 1 <= N <= 255), the network as OpenCV
+// FileStorage YAML (node opencv_ml_ann_mlp; the two-tool network, when there is one, node
+// two_tool_ann_mlp; the profile network, with the profile features only and then required,
+// profile_ann_mlp), then "fnv1a " and the FNV-1a 64-bit hash of everything before it as 16
+// hex digits and "\n" (the same non-standard offset basis as tool_likelihood.hpp's).
+// parse()/load() refuse another header, a hash mismatch, a malformed threshold, or a
+// network that is not features-hidden-classes, with a message naming the file (the network
+// must be 6-N-7, 9-N-8 or 11-N-8, the profile network 31-N-8, 2 <= N <= kGestureMaxHidden,
+// every list as long as the layers make it). serialise() gives the bytes (the caller
+// writes them atomically). classify() is for the per-frame path: no exceptions, no
+// allocation.
 #pragma once
 
 #include <array>
@@ -80,6 +83,7 @@ constexpr int kGestureMaxHidden = 1000;  // hidden units; OpenCV needs at least 
 struct GestureTrainParams {
     GestureFeatureSet features = GestureFeatureSet::kBook;
     GestureSegmentation segmentation = GestureSegmentation::kLikelihood;
+    int threshold = 128;  // likelihood: the mask threshold (GestureSegmenterParams::threshold)
     int hidden = 20;
     int iterations = 3000;
     bool two_tool_network = false;  // a second network for two-tool regions (extended)
@@ -108,6 +112,8 @@ public:
     bool trained() const;
     GestureFeatureSet features() const { return features_; }
     GestureSegmentation segmentation() const { return segmentation_; }
+    // The likelihood segmentation's mask threshold the model was trained with.
+    int segmentation_threshold() const { return threshold_; }
 
     bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
                std::string& error);
@@ -132,6 +138,7 @@ private:
     std::unique_ptr<Net> net_;
     GestureFeatureSet features_ = GestureFeatureSet::kBook;
     GestureSegmentation segmentation_ = GestureSegmentation::kLikelihood;
+    int threshold_ = 128;
 };
 
 }  // namespace endotower::vision
