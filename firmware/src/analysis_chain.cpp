@@ -294,11 +294,7 @@ bool AnalysisChain::build(const BoardConfig& board, const hal::FrameFormat& inpu
                 command, error.c_str());
         error.clear();
     }
-    vision::GestureSegmenterParams gesture_seg;
-    gesture_seg.method = p.gesture_classifier.segmentation();
-    gesture_seg.threshold = p.gesture_classifier.segmentation_threshold();
-    gesture_seg.profile = p.gesture_classifier.features() == vision::GestureFeatureSet::kProfile;
-    p.gesture_segmenter.emplace(&p.gesture_tool_model, gesture_seg);
+    p.gesture_segmenter.emplace(&p.gesture_tool_model, p.gesture_classifier.segmenter_params());
     vision::GestureStageParams gesture_params;
     gesture_params.hold.hold_ms = board.gesture_hold_ms;
     p.gesture_stage.emplace(*p.gesture_segmenter, p.gesture_classifier, gesture_params);

@@ -192,15 +192,19 @@ int run_train_gestures_command(const Args& args) {
     }
     vision::GestureClassifier classifier;
     std::string error;
+    // A model measured or extended: its features and segmentation are the ones used.
+    auto take_model = [&params](const vision::GestureClassifier& c) {
+        params.features = c.features();
+        params.segmentation = c.segmentation();
+        params.threshold = c.segmentation_threshold();
+    };
     if (!model_path.empty()) {
         // Measure a model that exists (the shipped one) on the --test recordings, no training.
         if (!scenes.empty() || !single_scenes.empty() || !two_scenes.empty() || !out.empty())
             return usage_error("--model measures a model: give only --test DIR and --tool-model");
         if (tests.empty()) return usage_error("--model needs at least one --test DIR");
         if (!classifier.load(model_path, error)) return usage_error(error);
-        params.features = classifier.features();
-        params.segmentation = classifier.segmentation();
-        params.threshold = classifier.segmentation_threshold();
+        take_model(classifier);
     } else {
         if (out.empty()) return usage_error("give --out FILE");
         if (scenes.empty()) return usage_error("give at least one --scene DIR");
@@ -214,9 +218,7 @@ int run_train_gestures_command(const Args& args) {
         if (!classifier.load(base_path, error)) return usage_error(error);
         if (!classifier.has_two_tool_network())
             return usage_error(base_path + ": has no two-tool network (--networks two)");
-        params.features = classifier.features();
-        params.segmentation = classifier.segmentation();
-        params.threshold = classifier.segmentation_threshold();
+        take_model(classifier);
         params.two_tool_network = true;
     }
     // A model segments with the threshold it was trained with: one given must agree.

@@ -54,10 +54,7 @@ struct GestureFrames {
             scene::FrameTruth truth;
             renderer.render(i * 4, frames[i], truth);
         }
-        vision::GestureSegmenterParams p;
-        p.method = classifier.segmentation();
-        p.threshold = classifier.segmentation_threshold();
-        p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
+        vision::GestureSegmenterParams p = classifier.segmenter_params();
         p.threads = threads;
         segmenter = std::make_unique<vision::GestureSegmenter>(&tool_model, p);
         segmenter->configure(fmt);

@@ -269,6 +269,14 @@ GestureResult GestureClassifier::classify(const GestureFeatures& f, int entries)
     return one;
 }
 
+GestureSegmenterParams GestureClassifier::segmenter_params() const {
+    GestureSegmenterParams p;
+    p.method = segmentation_;
+    p.threshold = threshold_;
+    p.profile = features_ == GestureFeatureSet::kProfile;
+    return p;
+}
+
 std::string GestureClassifier::serialise() const {
     std::string body = kMagic;
     body += std::string("features ") + feature_name(features_) + "\n";

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -70,11 +71,7 @@ protected:
         std::string error;
         EXPECT_TRUE(tool_model.load(kModels + "gesture_tool_likelihood.bin", error)) << error;
         EXPECT_TRUE(classifier.load(kModels + "gestures.yml", error)) << error;
-        vision::GestureSegmenterParams p;
-        p.method = classifier.segmentation();
-        p.threshold = classifier.segmentation_threshold();
-        p.profile = classifier.features() == vision::GestureFeatureSet::kProfile;
-        vision::GestureSegmenter segmenter(&tool_model, p);
+        vision::GestureSegmenter segmenter(&tool_model, classifier.segmenter_params());
         std::vector<vision::GestureSample> samples;
         firmware::GestureDatasetStats stats;
         for (const fs::path& s : scenes)
@@ -298,6 +295,7 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
         vision::GestureClassifier classifier;
         ASSERT_TRUE(classifier.load(model.string(), error)) << error;
         ASSERT_EQ(classifier.segmentation_threshold(), threshold);
+        ASSERT_EQ(classifier.segmenter_params().threshold, threshold);
         const fs::path trace = dir() / (name + "_trace.jsonl");
         const fs::path b = dir() / ("board_" + name);
         fs::create_directories(b);
@@ -306,10 +304,7 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
                       (dir() / (name + ".mkv")).string()),
                   0)
             << slurp(dir() / "out.err");
-        vision::GestureSegmenterParams p;
-        p.threshold = threshold;
-        p.profile = true;
-        vision::GestureSegmenter segmenter(&pixels, p);
+        vision::GestureSegmenter segmenter(&pixels, classifier.segmenter_params());
         std::ifstream lines(trace);
         std::string l;
         auto& tips = tips_at[threshold == 128 ? 0 : 1];
@@ -325,20 +320,16 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
             std::array<vision::GestureBlob, vision::GestureSegmenter::kMaxBlobs> blobs{};
             const std::size_t n = segmenter.segment(f, blobs);
             tips.emplace_back();
-            std::size_t from = l.find("\"tools\":[");
-            ASSERT_NE(from, std::string::npos) << l;
+            const nlohmann::json traced = nlohmann::json::parse(l).at("gesture").at("tools");
+            ASSERT_EQ(traced.size(), n) << name << " frame " << frame;
             for (std::size_t i = 0; i < n; ++i) {
                 tips.back().push_back({blobs[i].tip.x, blobs[i].tip.y});
-                from = l.find("\"tip_px\":[", from);
-                ASSERT_NE(from, std::string::npos) << name << " frame " << frame << ": " << l;
-                double x = 0, y = 0;
-                ASSERT_EQ(std::sscanf(l.c_str() + from, "\"tip_px\":[%lf,%lf]", &x, &y), 2);
-                EXPECT_NEAR(x, blobs[i].tip.x, 1e-6) << name << " frame " << frame;
-                EXPECT_NEAR(y, blobs[i].tip.y, 1e-6) << name << " frame " << frame;
-                ++from;
+                const nlohmann::json& tip = traced[i].at("tip_px");
+                EXPECT_NEAR(tip.at(0).get<double>(), blobs[i].tip.x, 1e-6)
+                    << name << " frame " << frame;
+                EXPECT_NEAR(tip.at(1).get<double>(), blobs[i].tip.y, 1e-6)
+                    << name << " frame " << frame;
             }
-            EXPECT_EQ(l.find("\"tip_px\":[", from), std::string::npos)
-                << name << " frame " << frame << ": more regions traced than " << n;
         }
         EXPECT_EQ(tips.size(), 28u);
     }

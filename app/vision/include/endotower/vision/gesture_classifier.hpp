@@ -114,6 +114,9 @@ public:
     GestureSegmentation segmentation() const { return segmentation_; }
     // The likelihood segmentation's mask threshold the model was trained with.
     int segmentation_threshold() const { return threshold_; }
+    // The segmenter the model was trained on: its method and threshold, and the profile
+    // measured when the model reads it; GestureSegmenterParams' defaults otherwise.
+    GestureSegmenterParams segmenter_params() const;
 
     bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
                std::string& error);
