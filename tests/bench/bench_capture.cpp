@@ -24,7 +24,6 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "c_alloc_counter.hpp"
 #include "endotower/v4l2/mjpeg_decoder.hpp"
 #include "endotower/v4l2/v4l2_capture.hpp"
 

@@ -19,7 +19,6 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "c_alloc_counter.hpp"
 #include "endotower/scene/renderer.hpp"
 #include "endotower/vision/gesture_classifier.hpp"
 #include "endotower/vision/gesture_segmenter.hpp"

@@ -2,7 +2,7 @@
 //  - propagation: the per-frame cost of keeping a marked region anchored at 1920x1080
 //    (LK on the region's points + RANSAC homography), drift correction off, and its heap
 //    allocations per frame (allocs_per_frame: operator new; c_allocs_per_frame: the C
-//    allocator, where OpenCV's buffers come from, operator new's included);
+//    allocator, where OpenCV's buffers come from);
 //  - keyframe matching per descriptor at 640x480 and 1920x1080: in a window around
 //    the region (drift correction, while tracked) and over the whole frame (recovery,
 //    while lost);
@@ -21,7 +21,6 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "c_alloc_counter.hpp"
 #include "endotower/vision/region_tracker.hpp"
 #include "region_test_util.hpp"
 

@@ -2,8 +2,8 @@
 // allocations, the project's rule) and the C allocator (OpenCV's internal buffers
 // come from posix_memalign), by replacing operator new and interposing glibc's malloc
 // family over its __libc_ entry points. Linked into the vision tests that count
-// (test_vision, test_gesture_golden, test_region_propagation, test_book_trackers) and
-// test_mjpeg.
+// (test_vision, test_gesture_golden, test_region_propagation, test_book_trackers),
+// test_mjpeg and the benchmarks (tests/bench/alloc_counter.cpp).
 // Under ASan/TSan the sanitizer owns malloc: the C allocator is not interposed there
 // and neither is operator new: both counts read -1 (the tests then do not assert them).
 #include "heap_counter.hpp"
@@ -49,6 +49,16 @@ std::atomic<bool> g_on{false};
     if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
 #else
     if (void* p = __libc_malloc(n == 0 ? 1 : n)) return p;
+#endif
+    throw std::bad_alloc();
+}
+[[maybe_unused]] void* counted_new(std::size_t n, std::align_val_t a) {
+    if (g_on.load(std::memory_order_relaxed)) g_new_count.fetch_add(1, std::memory_order_relaxed);
+    const auto al = static_cast<std::size_t>(a);
+#if ENDOTOWER_SANITIZED
+    if (void* p = std::aligned_alloc(al, (n + al - 1) / al * al)) return p;
+#else
+    if (void* p = __libc_memalign(al, n == 0 ? 1 : n)) return p;
 #endif
     throw std::bad_alloc();
 }
@@ -116,6 +126,24 @@ void operator delete(void* p, std::size_t) noexcept {
     std::free(p);
 }
 void operator delete[](void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void* operator new(std::size_t n, std::align_val_t a) {
+    return counted_new(n, a);
+}
+void* operator new[](std::size_t n, std::align_val_t a) {
+    return counted_new(n, a);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
     std::free(p);
 }
 #endif
