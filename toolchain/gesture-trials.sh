@@ -2,8 +2,10 @@
 # The gesture trials of docs/gestures.md (table 3.3 layout, the 1 s hold): renders the
 # fig. 3.22 (grasper, scissors) and fig. 3.23 suites at --scale 15 (30 frames = 1.2 s
 # per state), replays them with only the gesture stage on and scores the traces with
-# 'endotower eval'; prints each suite's summary and confusion table.
-# Usage: [ENDOTOWER=BINARY] [SUITES="..."] toolchain/gesture-trials.sh [OUT] [MODEL]
+# 'endotower eval'; prints each suite's summary and confusion table, and with more than
+# one suite the table of all of them together (their traces and truths joined, frames
+# renumbered: OUT/all, OUT/report_all).
+# Usage: [ENDOTOWER=BINARY] [SUITES="..."] [KEEP_VIDEO=1] toolchain/gesture-trials.sh [OUT] [MODEL]
 #   SUITES scenarios under board/sim/scenarios, without .yaml (default the three above;
 #          e.g. "gestures/test_random40_double": the random poses, docs/gestures.md)
 #   OUT    work and report folder (default build/gesture-eval)
@@ -16,6 +18,7 @@ bin=${ENDOTOWER:-$root/build/release/firmware/endotower}
 [ -x "$bin" ] || "$root/toolchain/build.sh" release
 # Another build's binary (ENDOTOWER) replays the frames already rendered in OUT.
 mkdir -p "$out"
+joined=()
 cat >"$out/board.yaml" <<BOARD
 board: gesture-trials
 analysis:
@@ -36,4 +39,42 @@ for scenario in ${SUITES:-fig322_grasper_orientations fig322_scissors_orientatio
   "$bin" eval --trace "$out/$s.jsonl" --truth "$out/$s/truth.jsonl" --report "$out/report_$s" |
     grep '^gestures:'
   sed -n '/^| Performed/,/^$/p' "$out/report_$s/report.md"
+  # The replayed video is not scored (a random40 suite's is 800 MB): kept only with
+  # KEEP_VIDEO=1.
+  [ "${KEEP_VIDEO:-0}" = 1 ] || rm -f "$out/$s.mkv"
+  joined+=("$out/$s.jsonl=$out/$s/truth.jsonl")
 done
+[ "${#joined[@]}" -gt 1 ] || exit 0
+# Every suite's trials in one table: frames renumbered, each trace's clock moved past the
+# last (each suite's first trial starts on a fresh hold there too: its first frame comes
+# a second after the last suite's last).
+mkdir -p "$out/all"
+python3 - "$out/all" "${joined[@]}" <<'PY'
+import json, os, sys
+out = sys.argv[1]
+with open(out + "/trace.jsonl.tmp", "w") as trace, open(out + "/truth.jsonl.tmp", "w") as truth:
+    frame, clock = 0, 0
+    for pair in sys.argv[2:]:
+        trace_path, truth_path = pair.split("=")
+        steps = [json.loads(l) for l in open(trace_path)]
+        truths = [json.loads(l) for l in open(truth_path)]
+        if len(steps) != len(truths):
+            sys.exit(f"{trace_path}: {len(steps)} frames, {truth_path}: {len(truths)}")
+        for t in truths:
+            t["frame"] += frame
+            truth.write(json.dumps(t) + "\n")
+        for s in steps:
+            s["frame"] += frame
+            s["seq"] += frame
+            s["capture_ns"] += clock
+            s["present_ns"] += clock
+            trace.write(json.dumps(s) + "\n")
+        frame += len(steps)
+        clock += steps[-1]["capture_ns"] + 10**9
+for name in ("trace.jsonl", "truth.jsonl"):
+    os.replace(f"{out}/{name}.tmp", f"{out}/{name}")
+PY
+echo "all suites:"
+"$bin" eval --trace "$out/all/trace.jsonl" --truth "$out/all/truth.jsonl" --report "$out/report_all" |
+  grep '^gestures:'
+sed -n '/^| Performed/,/^$/p' "$out/report_all/report.md"
