@@ -67,8 +67,10 @@ void GestureStage::process(app::AnalysisContext& ctx) {
     const std::size_t n =
         segmenter_.segment(ctx.frame, std::span<GestureBlob, GestureSegmenter::kMaxBlobs>(blobs_));
     std::array<GestureResult, GestureSegmenter::kMaxBlobs> results{};
+    std::array<int, GestureSegmenter::kMaxBlobs> read{};  // the network's, before the rules
     for (std::size_t i = 0; i < n; ++i) {
         results[i] = classifier_.classify(blobs_[i].features, blobs_[i].entries);
+        read[i] = results[i].label;
         // A tip window that no arm leaves holds the whole region, not jaws: a thick tool
         // near the scope widened it past the picture (docs/gestures.md, "No arm"). Two
         // tools whose jaws cross leave the window as two shafts; one arm is a tool
@@ -136,6 +138,10 @@ void GestureStage::process(app::AnalysisContext& ctx) {
             ctx.trace.field("label", kGestureLabels[results[i].label]);
         else
             ctx.trace.null_field("label");
+        if (read[i] >= 0)
+            ctx.trace.field("read", kGestureLabels[read[i]]);
+        else
+            ctx.trace.null_field("read");
         ctx.trace.field("confidence", results[i].confidence)
             .field("entries", blobs_[i].entries)
             .field("arms", blobs_[i].arms)

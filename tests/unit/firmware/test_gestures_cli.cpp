@@ -272,7 +272,8 @@ TEST_F(Gestures, CorruptPixelModelDisablesGesturesNotTheVideo) {
 }
 
 // The firmware segments with the threshold stored in the model: `sim`'s traced regions
-// (count and tips, every frame) are those of the segmenter run here at that threshold,
+// (count and tips, every frame, and each region's "read": the network's label and
+// confidence on its features) are those of the segmenter run here at that threshold,
 // for the shipped networks stored once with threshold 128 and once with 200 (which
 // give different regions here: checked, so the comparison can tell them apart).
 TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
@@ -285,6 +286,7 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
     std::string error;
     ASSERT_TRUE(pixels.load(kModels + "gesture_tool_likelihood.bin", error)) << error;
     std::vector<std::vector<std::array<double, 2>>> tips_at[2];
+    int overruled = 0, read_any = 0;  // regions read as a gesture: all, and set to none
     for (const int threshold : {128, 200}) {
         const std::string name = "t" + std::to_string(threshold);
         const fs::path model = dir() / (name + ".yml");
@@ -329,11 +331,28 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
                     << name << " frame " << frame;
                 EXPECT_NEAR(tip.at(1).get<double>(), blobs[i].tip.y, 1e-6)
                     << name << " frame " << frame;
+                // "read": the network's label before the stage's rules, its confidence;
+                // "label": that or null.
+                const vision::GestureResult r =
+                    classifier.classify(blobs[i].features, blobs[i].entries);
+                const nlohmann::json& got = traced[i].at("read");
+                if (r.label >= 0)
+                    EXPECT_EQ(got, vision::kGestureLabels[r.label]) << name << " frame " << frame;
+                else
+                    EXPECT_TRUE(got.is_null()) << name << " frame " << frame;
+                EXPECT_NEAR(traced[i].at("confidence").get<double>(), r.confidence, 1e-6);
+                const nlohmann::json& label = traced[i].at("label");
+                EXPECT_TRUE(label.is_null() || label == got) << name << " frame " << frame;
+                overruled += !got.is_null() && label.is_null();
+                read_any += !got.is_null();
             }
         }
         EXPECT_EQ(tips.size(), 28u);
     }
     EXPECT_NE(tips_at[0], tips_at[1]);
+    std::printf("regions read as a gesture: %d, set to none by the stage's rules: %d\n", read_any,
+                overruled);
+    EXPECT_GT(read_any, 40);
 }
 
 TEST_F(Gestures, EvalConfusionOnARenderedSuite) {

@@ -33,8 +33,10 @@
 // capture times (exact on the virtual clock).
 // Trace member, every frame:
 //   "gesture": {"label": string|null, "confidence", "held_ms", "fired",
-//               "tools": [{"label", "confidence", "entries", "arms", "thin_arms",
-//                          "tip_px": [x, y]}]}
+//               "tools": [{"label", "read", "confidence", "entries", "arms",
+//                          "thin_arms", "tip_px": [x, y]}]}
+//   (per region, "read" is the network's label before the rules above, null for "not a
+//   tool"; "label" is "read" or null; "confidence" is the read label's output)
 // Overlay: a square at each classified tip, filled when the gesture has fired.
 // Borrows the segmenter and the classifier. current(): this frame's gesture for the
 // stages after it in the chain (the SCI).
