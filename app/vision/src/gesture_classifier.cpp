@@ -348,8 +348,8 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         long n = 0;
         if (segmentation != "likelihood" || !(r >> word >> n) || word != "threshold" || n < 1 ||
             n > 255 || (r >> extra))
-            return fail("line 3: expected 'segmentation likelihood threshold N' (1..255) after '" +
-                        segmentation + "', got '" + rest + "'");
+            return fail("line 3: expected 'segmentation likelihood threshold N' (1..255), got '" +
+                        key + " " + segmentation + rest + "'");
         threshold = static_cast<int>(n);
     }
     const GestureFeatureSet fs_set = features == "book"       ? GestureFeatureSet::kBook

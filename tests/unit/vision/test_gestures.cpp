@@ -519,7 +519,8 @@ TEST(GestureClassifier, TheSegmentationThresholdTravelsWithTheModel) {
         GestureClassifier r;
         EXPECT_FALSE(r.parse(edited_model(b, line, bad), "m.yml", error)) << bad;
         EXPECT_NE(error.find("m.yml: line 3: expected 'segmentation likelihood threshold N' "
-                             "(1..255)"),
+                             "(1..255), got '" +
+                             std::string(bad) + "'"),
                   std::string::npos)
             << error;
         EXPECT_FALSE(r.trained());
