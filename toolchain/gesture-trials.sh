@@ -42,37 +42,43 @@ for scenario in ${SUITES:-fig322_grasper_orientations fig322_scissors_orientatio
   # The replayed video is not scored (a random40 suite's is 800 MB): kept only with
   # KEEP_VIDEO=1.
   [ "${KEEP_VIDEO:-0}" = 1 ] || rm -f "$out/$s.mkv"
-  joined+=("$out/$s.jsonl=$out/$s/truth.jsonl")
+  joined+=("$out/$s.jsonl" "$out/$s/truth.jsonl")
 done
-[ "${#joined[@]}" -gt 1 ] || exit 0
-# Every suite's trials in one table: frames renumbered, each trace's clock moved past the
-# last (each suite's first trial starts on a fresh hold there too: its first frame comes
-# a second after the last suite's last).
+[ "${#joined[@]}" -gt 2 ] || exit 0
+# Every suite's trials in one table: frames renumbered, and each trace's clock moved past
+# the one before it so the joined trace's times keep increasing (the holds and fires are
+# each suite's own, from its replay).
 mkdir -p "$out/all"
 python3 - "$out/all" "${joined[@]}" <<'PY'
 import json, os, sys
-out = sys.argv[1]
-with open(out + "/trace.jsonl.tmp", "w") as trace, open(out + "/truth.jsonl.tmp", "w") as truth:
-    frame, clock = 0, 0
-    for pair in sys.argv[2:]:
-        trace_path, truth_path = pair.split("=")
-        steps = [json.loads(l) for l in open(trace_path)]
-        truths = [json.loads(l) for l in open(truth_path)]
-        if len(steps) != len(truths):
-            sys.exit(f"{trace_path}: {len(steps)} frames, {truth_path}: {len(truths)}")
-        for t in truths:
-            t["frame"] += frame
-            truth.write(json.dumps(t) + "\n")
-        for s in steps:
-            s["frame"] += frame
-            s["seq"] += frame
-            s["capture_ns"] += clock
-            s["present_ns"] += clock
-            trace.write(json.dumps(s) + "\n")
-        frame += len(steps)
-        clock += steps[-1]["capture_ns"] + 10**9
-for name in ("trace.jsonl", "truth.jsonl"):
-    os.replace(f"{out}/{name}.tmp", f"{out}/{name}")
+out, paths = sys.argv[1], sys.argv[2:]
+names = [f"{out}/trace.jsonl", f"{out}/truth.jsonl"]
+try:
+    with open(names[0] + ".tmp", "w") as trace, open(names[1] + ".tmp", "w") as truth:
+        frame, clock = 0, 0
+        for trace_path, truth_path in zip(paths[0::2], paths[1::2]):
+            steps = [json.loads(l) for l in open(trace_path)]
+            truths = [json.loads(l) for l in open(truth_path)]
+            if len(steps) != len(truths):
+                raise ValueError(f"{trace_path}: {len(steps)} frames, {truth_path}: {len(truths)}")
+            for t in truths:
+                t["frame"] += frame
+                truth.write(json.dumps(t) + "\n")
+            for s in steps:
+                s["frame"] += frame
+                s["seq"] += frame
+                s["capture_ns"] += clock
+                s["present_ns"] += clock
+                trace.write(json.dumps(s) + "\n")
+            frame += len(steps)
+            clock += steps[-1]["capture_ns"] + 10**9
+except (OSError, ValueError, KeyError) as e:  # nothing half-written is left behind
+    for n in names:
+        if os.path.exists(n + ".tmp"):
+            os.remove(n + ".tmp")
+    sys.exit(f"gesture-trials: joining the suites: {e}")
+for n in names:
+    os.replace(n + ".tmp", n)
 PY
 echo "all suites:"
 "$bin" eval --trace "$out/all/trace.jsonl" --truth "$out/all/truth.jsonl" --report "$out/report_all" |
