@@ -239,11 +239,7 @@ int run_train_gestures_command(const Args& args) {
             return usage_error("likelihood segmentation needs --tool-model FILE");
         if (!tool_model.load(tool_model_path, error)) return usage_error(error);
     }
-    vision::GestureSegmenterParams seg_params;
-    seg_params.method = params.segmentation;
-    seg_params.threshold = params.threshold;
-    seg_params.profile = params.features == vision::GestureFeatureSet::kProfile;
-    vision::GestureSegmenter segmenter(&tool_model, seg_params);
+    vision::GestureSegmenter segmenter(&tool_model, vision::gesture_segmenter_params(params));
 
     if (!model_path.empty()) return print_tests(classifier, segmenter, tests, error);
     std::vector<vision::GestureSample> samples;

@@ -269,12 +269,20 @@ GestureResult GestureClassifier::classify(const GestureFeatures& f, int entries)
     return one;
 }
 
+GestureSegmenterParams gesture_segmenter_params(const GestureTrainParams& p) {
+    GestureSegmenterParams s;
+    s.method = p.segmentation;
+    s.threshold = p.threshold;
+    s.profile = p.features == GestureFeatureSet::kProfile;
+    return s;
+}
+
 GestureSegmenterParams GestureClassifier::segmenter_params() const {
-    GestureSegmenterParams p;
-    p.method = segmentation_;
+    GestureTrainParams p;
+    p.features = features_;
+    p.segmentation = segmentation_;
     p.threshold = threshold_;
-    p.profile = features_ == GestureFeatureSet::kProfile;
-    return p;
+    return gesture_segmenter_params(p);
 }
 
 std::string GestureClassifier::serialise() const {

@@ -181,10 +181,9 @@ TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
     scene::FrameTruth truth;
     renderer.render(0, images[0], truth);
     renderer.render(8, images[1], truth);
-    // The shipped path: the profile across the shaft is measured when the model reads it.
-    GestureSegmenterParams params;
-    params.profile = classifier.features() == GestureFeatureSet::kProfile;
-    GestureSegmenter segmenter(&model, params);
+    // The shipped path: the model's own segmenter (its threshold; the profile across the
+    // shaft, which the model reads).
+    GestureSegmenter segmenter(&model, classifier.segmenter_params());
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
     segmenter.configure(fmt);
     std::array<GestureBlob, GestureSegmenter::kMaxBlobs> blobs{};

@@ -92,6 +92,10 @@ struct GestureTrainParams {
 
 constexpr int kNotATool = kGestureLabelCount;  // the extended classifier's eighth class
 
+// The segmenter the networks of `p` read: its method and threshold, and the profile
+// measured for the profile features; GestureSegmenterParams' defaults otherwise.
+GestureSegmenterParams gesture_segmenter_params(const GestureTrainParams& p);
+
 struct GestureSample {
     GestureFeatures features;
     int label = 0;                  // index in kGestureLabels, or kNotATool
@@ -114,8 +118,7 @@ public:
     GestureSegmentation segmentation() const { return segmentation_; }
     // The likelihood segmentation's mask threshold the model was trained with.
     int segmentation_threshold() const { return threshold_; }
-    // The segmenter the model was trained on: its method and threshold, and the profile
-    // measured when the model reads it; GestureSegmenterParams' defaults otherwise.
+    // The segmenter the model was trained on (gesture_segmenter_params of its settings).
     GestureSegmenterParams segmenter_params() const;
 
     bool train(const std::vector<GestureSample>& samples, const GestureTrainParams& params,
