@@ -43,25 +43,19 @@ std::atomic<bool> g_on{false};
 [[maybe_unused]] void note() {
     if (g_on.load(std::memory_order_relaxed)) g_count.fetch_add(1, std::memory_order_relaxed);
 }
-[[maybe_unused]] void* counted_new(std::size_t n) {
+#if !ENDOTOWER_SANITIZED
+// operator new's allocations, from glibc's own entry points (not the counted malloc).
+void* counted_new(std::size_t n) {
     if (g_on.load(std::memory_order_relaxed)) g_new_count.fetch_add(1, std::memory_order_relaxed);
-#if ENDOTOWER_SANITIZED
-    if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-#else
     if (void* p = __libc_malloc(n == 0 ? 1 : n)) return p;
-#endif
     throw std::bad_alloc();
 }
-[[maybe_unused]] void* counted_new(std::size_t n, std::align_val_t a) {
+void* counted_new(std::size_t n, std::align_val_t a) {
     if (g_on.load(std::memory_order_relaxed)) g_new_count.fetch_add(1, std::memory_order_relaxed);
-    const auto al = static_cast<std::size_t>(a);
-#if ENDOTOWER_SANITIZED
-    if (void* p = std::aligned_alloc(al, (n + al - 1) / al * al)) return p;
-#else
-    if (void* p = __libc_memalign(al, n == 0 ? 1 : n)) return p;
-#endif
+    if (void* p = __libc_memalign(static_cast<std::size_t>(a), n == 0 ? 1 : n)) return p;
     throw std::bad_alloc();
 }
+#endif
 }  // namespace
 
 namespace endotower::test {
