@@ -14,7 +14,8 @@
 # held-out test sets (docs/gestures.md).
 # Deterministic: same bytes every run.
 # Usage: toolchain/train-gesture-model.sh [OUT] [--features book|extended|topology|profile]
-#        [--segmentation likelihood|morphology] [--threshold N] [--test DIR]...
+#        [--segmentation likelihood|morphology] [--threshold N] [--single-threshold M]
+#        [--test DIR]...
 #        (default: the shipped model)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -31,6 +32,13 @@ esac
 case " $* " in
   *" --threshold "* | *" morphology "*) ;;
   *) set -- --threshold 170 "$@" ;;
+esac
+# And the one-tool mask's (a region entering once is measured again on the mask at 190,
+# which joins less sheen to a lone tool's jaws; crossings stay at 170: docs/gestures.md,
+# "Two masks"); --single-threshold 0 for one mask, as the models before 2026-11-30.
+case " $* " in
+  *" --single-threshold "* | *" morphology "*) ;;
+  *) set -- --single-threshold 190 "$@" ;;
 esac
 bin=$root/build/release/firmware/endotower
 [ -x "$bin" ] || "$root/toolchain/build.sh" release

@@ -19,7 +19,8 @@ void print_help() {
         "                                [--features book|extended|topology|profile]\n"
         "                                [--segmentation "
         "likelihood|morphology]\n"
-        "                                [--threshold N] [--tool-model FILE] [--every N]\n"
+        "                                [--threshold N] [--single-threshold M]\n"
+        "                                [--tool-model FILE] [--every N]\n"
         "                                [--hidden N] "
         "[--iterations N]\n"
         "                                [--networks one|two] [--rprop] [--match-widths N]\n"
@@ -43,6 +44,9 @@ void print_help() {
         "  --threshold N      likelihood segmentation: the mask threshold on the smoothed tool\n"
         "                     probability, 1..255 (default 128 = even odds; stored in the\n"
         "                     model, so the firmware segments the same way)\n"
+        "  --single-threshold M  likelihood: a second mask at M (above the threshold) on\n"
+        "                     which a region that enters once (one tool) is measured again\n"
+        "                     (default 0: none; stored in the model)\n"
         "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
         "  --every N          use every N-th frame (default 1)\n"
         "  --hidden N         hidden units (default 20)\n"
@@ -124,7 +128,8 @@ int run_train_gestures_command(const Args& args) {
     std::string out, tool_model_path, model_path, base_path;
     vision::GestureTrainParams params;
     params.features = vision::GestureFeatureSet::kTopology;
-    long every = 1, hidden = 20, iterations = 3000, match_widths = 2, threshold = 0;
+    long every = 1, hidden = 20, iterations = 3000, match_widths = 2, threshold = 0,
+         single_threshold = -1;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& k = args[i];
         if (k == "--help" || k == "-h") {
@@ -170,6 +175,10 @@ int run_train_gestures_command(const Args& args) {
         } else if (k == "--threshold") {
             if (!whole(v, 1, 255, threshold))
                 return usage_error("--threshold needs a whole number in 1..255, got '" + v + "'");
+        } else if (k == "--single-threshold") {
+            if (!whole(v, 0, 255, single_threshold))
+                return usage_error("--single-threshold needs a whole number in 0..255, got '" + v +
+                                   "'");
         } else if (k == "--every") {
             if (!whole(v, 1, 100000, every))
                 return usage_error("--every needs a whole number >= 1, got '" + v + "'");
@@ -197,6 +206,7 @@ int run_train_gestures_command(const Args& args) {
         params.features = c.features();
         params.segmentation = c.segmentation();
         params.threshold = c.segmentation_threshold();
+        params.single_threshold = c.single_tool_threshold();
     };
     if (!model_path.empty()) {
         // Measure a model that exists (the shipped one) on the --test recordings, no training.
@@ -230,6 +240,23 @@ int run_train_gestures_command(const Args& args) {
                                (model_path.empty() ? base_path : model_path) +
                                " was trained with threshold " + std::to_string(params.threshold));
         params.threshold = static_cast<int>(threshold);
+    }
+    if (single_threshold >= 0) {
+        if (params.segmentation != vision::GestureSegmentation::kLikelihood)
+            return usage_error("--single-threshold is for likelihood segmentation");
+        if ((!model_path.empty() || !base_path.empty()) &&
+            single_threshold != params.single_threshold)
+            return usage_error(
+                "--single-threshold " + std::to_string(single_threshold) + ": the model " +
+                (model_path.empty() ? base_path : model_path) + " was trained with " +
+                (params.single_threshold == 0
+                     ? std::string("no single-tool threshold")
+                     : "single-tool threshold " + std::to_string(params.single_threshold)));
+        if (single_threshold != 0 && single_threshold <= params.threshold)
+            return usage_error("--single-threshold " + std::to_string(single_threshold) +
+                               " must be above the mask threshold " +
+                               std::to_string(params.threshold));
+        params.single_threshold = static_cast<int>(single_threshold);
     }
     params.hidden = static_cast<int>(hidden);
     params.iterations = static_cast<int>(iterations);

@@ -189,6 +189,7 @@ bool GestureClassifier::train(const std::vector<GestureSample>& samples,
     features_ = params.features;
     segmentation_ = params.segmentation;
     threshold_ = params.threshold;
+    single_threshold_ = single_mask_threshold(params);
     return true;
 }
 
@@ -199,7 +200,7 @@ bool GestureClassifier::retrain_two_tool(const std::vector<GestureSample>& sampl
         return false;
     }
     if (params.features != features_ || params.segmentation != segmentation_ ||
-        params.threshold != threshold_) {
+        params.threshold != threshold_ || single_mask_threshold(params) != single_threshold_) {
         error = "the samples' features or segmentation are not the model's";
         return false;
     }
@@ -273,6 +274,7 @@ GestureSegmenterParams gesture_segmenter_params(const GestureTrainParams& p) {
     GestureSegmenterParams s;
     s.method = p.segmentation;
     s.threshold = p.threshold;
+    s.single_threshold = single_mask_threshold(p);
     s.profile = p.features == GestureFeatureSet::kProfile;
     return s;
 }
@@ -282,6 +284,7 @@ GestureSegmenterParams GestureClassifier::segmenter_params() const {
     p.features = features_;
     p.segmentation = segmentation_;
     p.threshold = threshold_;
+    p.single_threshold = single_threshold_;
     return gesture_segmenter_params(p);
 }
 
@@ -290,8 +293,10 @@ std::string GestureClassifier::serialise() const {
     body += std::string("features ") + feature_name(features_) + "\n";
     body += std::string("segmentation ") + segmentation_name(segmentation_);
     // The default threshold is not written: the files written before it existed read the same.
-    if (segmentation_ == GestureSegmentation::kLikelihood && threshold_ != kDefaultThreshold)
+    if (segmentation_ == GestureSegmentation::kLikelihood &&
+        (threshold_ != kDefaultThreshold || single_threshold_ != 0))
         body += " threshold " + std::to_string(threshold_);
+    if (single_threshold_ != 0) body += " single " + std::to_string(single_threshold_);
     body += "\n";
     if (trained()) {
         cv::FileStorage fs(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
@@ -349,16 +354,21 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
         return fail("line 3: expected 'segmentation morphology' or 'segmentation likelihood'");
     std::string rest;
     std::getline(in, rest);
-    int threshold = kDefaultThreshold;
+    int threshold = kDefaultThreshold, single = 0;
     if (!rest.empty()) {
         std::istringstream r(rest);
         std::string word, extra;
-        long n = 0;
-        if (segmentation != "likelihood" || !(r >> word >> n) || word != "threshold" || n < 1 ||
-            n > 255 || (r >> extra))
-            return fail("line 3: expected 'segmentation likelihood threshold N' (1..255), got '" +
-                        key + " " + segmentation + rest + "'");
+        long n = 0, m = 0;
+        bool ok = segmentation == "likelihood" && (r >> word >> n) && word == "threshold" &&
+                  n >= 1 && n <= 255;
+        if (ok && (r >> word)) ok = word == "single" && (r >> m) && m > n && m <= 255;
+        if (!ok || (r >> extra))
+            return fail(
+                "line 3: expected 'segmentation likelihood threshold N' (1..255), optionally "
+                "followed by 'single M' (N < M <= 255), got '" +
+                key + " " + segmentation + rest + "'");
         threshold = static_cast<int>(n);
+        single = static_cast<int>(m);
     }
     const GestureFeatureSet fs_set = features == "book"       ? GestureFeatureSet::kBook
                                      : features == "extended" ? GestureFeatureSet::kExtended
@@ -420,6 +430,7 @@ bool GestureClassifier::parse(const std::string& bytes, const std::string& name,
     segmentation_ = segmentation == "morphology" ? GestureSegmentation::kMorphology
                                                  : GestureSegmentation::kLikelihood;
     threshold_ = threshold;
+    single_threshold_ = single;
     return true;
 }
 

@@ -112,6 +112,14 @@ GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, in
     return measure_gesture_features(mask, width, height, stride, tracer);
 }
 
+bool gesture_features_valid(const std::uint8_t* mask, int width, int height, int stride,
+                            ContourTracer& tracer) {
+    if (mask == nullptr || width <= 0 || height <= 0) return false;
+    double area = 0;
+    return !tracer.largest(mask, width, height, static_cast<std::size_t>(stride), area).empty() &&
+           area > 0;
+}
+
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
                                          int stride, ContourTracer& tracer) {
     GestureFeatures f;

@@ -42,6 +42,16 @@ struct GestureSegmenter::Work {
     void share(Part p);
     MaskOps ops;
     std::array<int, 15> fov_rows{};  // the field-of-view element's rows as half-widths
+    // The one-tool mask (`single_threshold`): the smoothed probability, its mask, regions.
+    MaskOps single_ops;
+    cv::Mat smoothed, single_binary, single_labels;
+    // The mask whose regions measure_region() reads: `binary` or `single_binary`.
+    // defer_one_tool: a region that enters once is only checked, not measured (the
+    // first mask's pass with two masks).
+    bool defer_one_tool = false;
+    const MaskOps* mask_ops = nullptr;
+    const cv::Mat* mask_binary = nullptr;
+    const cv::Mat* mask_labels = nullptr;
     cv::Mat small, gray, blurred, lit, eroded, a, opened, binary, labels;
     cv::Mat large_element, small_element;
     struct Px {
@@ -83,9 +93,27 @@ struct GestureSegmenter::Work {
     // The region `s.label`'s blob into s.blob; false: no tool's tip (not entering from
     // outside, not elongated, no valid features).
     bool measure_region(RegionScratch& s);
+    // Measures `regions` of the mask `b` (its regions `o`, labels `l`) on both threads;
+    // the blobs found are found[0, n), in the order of `regions`.
+    std::size_t measure_found(const MaskOps& o, const cv::Mat& b, const cv::Mat& l);
+    // `blobs` (found[i] each's): each one-entry blob, only checked so far, measured on
+    // the one-tool mask (`single_threshold`) from its region's largest part there, or
+    // on the first mask where that part is no tool's tip entering once.
+    void measure_single(const GestureSegmenterParams& p, std::span<GestureBlob> blobs);
 };
 
 namespace {
+
+// A second mask for one tool (GestureSegmenterParams::single_threshold).
+bool single_mask(const GestureSegmenterParams& p) {
+    return p.method == GestureSegmentation::kLikelihood && p.single_threshold > p.threshold;
+}
+
+// The 3x3 opening of `m`, in place.
+void open_in_place(MaskOps& o, cv::Mat& m) {
+    const BytePlane b{m.data, m.cols, m.rows, static_cast<std::size_t>(m.step)};
+    o.open3(b, b);
+}
 
 // The region's arms leaving the tip window: runs of region pixels on the circle of
 // radius `r` about (cx, cy) in `win` (window pixels; outside it counts as empty).
@@ -120,6 +148,13 @@ int count_arms(const cv::Mat& win, double cx, double cy, double r) {
 ENDOTOWER_WIDE_VECTORS void grey_row(const std::uint8_t* bgr, std::uint8_t* grey, int width) {
     for (int x = 0; x < width; ++x, bgr += 3)
         grey[x] = static_cast<std::uint8_t>((bgr[0] + bgr[1] + bgr[2]) / 3);
+}
+
+// 255 where `p` is at least `t` and `lit` is set, else 0, for one row of `width` pixels.
+ENDOTOWER_WIDE_VECTORS void at_least_lit(const std::uint8_t* p, const std::uint8_t* lit,
+                                         std::uint8_t t, std::uint8_t* out, int width) {
+    for (int x = 0; x < width; ++x)
+        out[x] = static_cast<std::uint8_t>((p[x] >= t ? 255 : 0) & (lit[x] != 0 ? 255 : 0));
 }
 
 // `p` where `lit` is set, else 0, for one row of `width` pixels.
@@ -193,7 +228,9 @@ bool GestureSegmenter::Work::measure_region(RegionScratch& s) {
         if (dx * dx + dy * dy < inner2) return false;
         return fr - std::hypot(dx, dy) < touch;
     };
-    const Component& c = ops.components()[s.label];
+    const Component& c = mask_ops->components()[s.label];
+    const cv::Mat& binary = *mask_binary;
+    const cv::Mat& labels = *mask_labels;
     const int bx = c.left, by = c.top, bw = c.right - c.left + 1, bh = c.bottom - c.top + 1;
     // The distance transform in the box and one pixel around (the whole region's
     // nearest zeros lie there: exactly cv::distanceTransform's values).
@@ -323,6 +360,14 @@ bool GestureSegmenter::Work::measure_region(RegionScratch& s) {
             win.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
     }
     GestureBlob& b = s.blob;
+    if (defer_one_tool && nb == 0) {
+        // One tool with two masks: measured in full once, by measure_single(); here only
+        // whether it is a tool's tip, as the features' `valid` would say.
+        b = GestureBlob{};
+        b.entries = 1;
+        return gesture_features_valid(win.data, win.cols, win.rows, static_cast<int>(win.step),
+                                      s.tracer);
+    }
     b.arms = count_arms(win, tx - x0, ty - y0, R - 1.5);  // before the tracer marks it
     // Two tools, one much thicker near the scope: the window of the thinner shaft.
     b.thin_arms = 0;
@@ -367,6 +412,11 @@ void GestureSegmenter::configure(const hal::FrameFormat& format) {
         m->create(sh, sw, CV_8U);
     w.labels.create(sh, sw, CV_32S);
     w.ops.configure(sw, sh);
+    if (single_mask(params_)) {
+        for (cv::Mat* m : {&w.smoothed, &w.single_binary}) m->create(sh, sw, CV_8U);
+        w.single_labels.create(sh, sw, CV_32S);
+        w.single_ops.configure(sw, sh);
+    }
     // Two bands of rows (halves) with `threads` = 2, else one; each band's own block
     // mean where the reduction is one (integer factor k: band rows [y0, y1) are the
     // input rows [k y0, k y1)).
@@ -451,9 +501,9 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
         // mask is the same.
         for (int y = 0; y < H; ++y)
             keep_lit(w.lit.ptr<std::uint8_t>(y), w.blurred.ptr<std::uint8_t>(y), W);
-        w.ops.smooth_at_least(plane(w.blurred), params_.threshold, plane(w.eroded),
-                              plane(w.binary));
-        w.ops.open3(plane(w.binary), plane(w.binary));
+        w.ops.smooth_at_least(plane(w.blurred), params_.threshold, plane(w.eroded), plane(w.binary),
+                              single_mask(params_) ? plane(w.smoothed) : BytePlane{});
+        open_in_place(w.ops, w.binary);
     } else {
         // eq. 3.3: A - (A o B1); eq. 3.5: A + (A o B2); then a high threshold.
         cv::bitwise_not(w.gray, w.a);
@@ -483,17 +533,112 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     // the order than any it did not take, so those first kMaxBlobs are among the found.
     w.field = {fcx, fcy, fr, touch};
     w.params = &params_;
-    w.next_region.store(0, std::memory_order_relaxed);
-    w.found_count.store(0, std::memory_order_relaxed);
-    w.found_slots.store(0, std::memory_order_relaxed);
-    w.share([](Work& ww, int i) { ww.measure_regions(ww.scratch[static_cast<std::size_t>(i)]); });
-    const auto n_found = std::min(
-        w.found.size(), static_cast<std::size_t>(w.found_slots.load(std::memory_order_relaxed)));
-    std::sort(w.found.begin(), w.found.begin() + static_cast<std::ptrdiff_t>(n_found),
-              [](const Work::Found& a, const Work::Found& b) { return a.region < b.region; });
-    const std::size_t found = std::min(n_found, out.size());
+    w.defer_one_tool = single_mask(params_);
+    const std::size_t found = std::min(w.measure_found(w.ops, w.binary, w.labels), out.size());
     for (std::size_t i = 0; i < found; ++i) out[i] = w.found[i].blob;
+    if (single_mask(params_)) w.measure_single(params_, out.first(found));
     return found;
+}
+
+std::size_t GestureSegmenter::Work::measure_found(const MaskOps& o, const cv::Mat& b,
+                                                  const cv::Mat& l) {
+    mask_ops = &o, mask_binary = &b, mask_labels = &l;
+    next_region.store(0, std::memory_order_relaxed);
+    found_count.store(0, std::memory_order_relaxed);
+    found_slots.store(0, std::memory_order_relaxed);
+    share([](Work& ww, int i) { ww.measure_regions(ww.scratch[static_cast<std::size_t>(i)]); });
+    const auto n = std::min(found.size(),
+                            static_cast<std::size_t>(found_slots.load(std::memory_order_relaxed)));
+    std::sort(found.begin(), found.begin() + static_cast<std::ptrdiff_t>(n),
+              [](const Found& a, const Found& b) { return a.region < b.region; });
+    return n;
+}
+
+void GestureSegmenter::Work::measure_single(const GestureSegmenterParams& p,
+                                            std::span<GestureBlob> blobs) {
+    // Each one-entry blob's region (its label in `labels`), before `regions` is reused.
+    std::array<int, kMaxBlobs> owner{};
+    for (std::size_t i = 0; i < blobs.size(); ++i)
+        owner[i] = blobs[i].entries == 1 ? regions[found[i].region].label : 0;
+    const int W = small.cols, H = small.rows;
+    // The second mask only in the box of those regions and 2 px around (what the opening
+    // reads): each region of it that lies in one of theirs lies in their box, and is
+    // the same there as over the whole picture once the ring the opening could not see
+    // whole is cleared (measure_region reads only inside a region's box and 1 px around).
+    int x0 = W, y0 = H, x1 = -1, y1 = -1;
+    for (std::size_t i = 0; i < blobs.size(); ++i) {
+        if (owner[i] == 0) continue;
+        const Component& c = ops.components()[owner[i]];
+        x0 = std::min(x0, c.left), y0 = std::min(y0, c.top);
+        x1 = std::max(x1, c.right), y1 = std::max(y1, c.bottom);
+    }
+    if (x1 < 0) return;
+    constexpr int kRing = 2;
+    const int bx0 = std::max(0, x0 - kRing), by0 = std::max(0, y0 - kRing);
+    const int bx1 = std::min(W - 1, x1 + kRing), by1 = std::min(H - 1, y1 + kRing);
+    const auto at_least = static_cast<std::uint8_t>(p.single_threshold);
+    for (int y = by0; y <= by1; ++y)
+        at_least_lit(smoothed.ptr<std::uint8_t>(y) + bx0, eroded.ptr<std::uint8_t>(y) + bx0,
+                     at_least, single_binary.ptr<std::uint8_t>(y) + bx0, bx1 - bx0 + 1);
+    const BytePlane plane{single_binary.ptr<std::uint8_t>(by0) + bx0, bx1 - bx0 + 1, by1 - by0 + 1,
+                          static_cast<std::size_t>(single_binary.step)};
+    single_ops.open3(plane, plane);
+    // The ring inside the picture: the opening there saw only part of its 5x5.
+    for (int y = by0; y <= by1; ++y) {
+        std::uint8_t* o = single_binary.ptr<std::uint8_t>(y);
+        const bool ring_row = (y < y0 && by0 > 0) || (y > y1 && by1 < H - 1);
+        for (int x = bx0; x <= bx1; ++x)
+            if (ring_row || (x < x0 && bx0 > 0) || (x > x1 && bx1 < W - 1)) o[x] = 0;
+    }
+    single_ops.label(plane, single_labels.ptr<std::int32_t>(by0) + bx0, static_cast<std::size_t>(W),
+                     bx0, by0);
+    const std::vector<Component>& comps = single_ops.components();
+    const double min_area = p.min_area_fraction * W * H;
+    // Per blob, the largest region of the one-tool mask inside its region (the one-tool
+    // mask lies inside the other: a higher threshold, the same opening).
+    regions.clear();
+    std::array<int, kMaxBlobs> candidate{};
+    for (std::size_t i = 0; i < blobs.size(); ++i) {
+        if (owner[i] == 0) continue;
+        const Component& c = ops.components()[owner[i]];
+        int best = 0;
+        for (int y = c.top; y <= c.bottom; ++y) {
+            const std::int32_t* l = labels.ptr<std::int32_t>(y);
+            const std::int32_t* sl = single_labels.ptr<std::int32_t>(y);
+            for (int x = c.left; x <= c.right; ++x) {
+                const int k = sl[x];
+                if (k == 0 || k == best || l[x] != owner[i] || comps[k].area < min_area) continue;
+                if (best == 0 || comps[k].area > comps[best].area ||
+                    (comps[k].area == comps[best].area && k < best))
+                    best = k;
+            }
+        }
+        if (best == 0) continue;
+        candidate[regions.size()] = static_cast<int>(i);
+        regions.push_back({best, comps[best].area});
+    }
+    // Measured in full: on the second mask, or where that has no tool's tip entering
+    // once inside the region, on the first, as with one mask.
+    defer_one_tool = false;
+    std::array<bool, kMaxBlobs> done{};
+    if (!regions.empty()) {
+        const std::size_t n = measure_found(single_ops, single_binary, single_labels);
+        for (std::size_t j = 0; j < n; ++j) {
+            const auto i = static_cast<std::size_t>(candidate[found[j].region]);
+            if (found[j].blob.entries == 1) blobs[i] = found[j].blob, done[i] = true;
+        }
+    }
+    regions.clear();
+    for (std::size_t i = 0; i < blobs.size(); ++i)
+        if (owner[i] != 0 && !done[i]) {
+            candidate[regions.size()] = static_cast<int>(i);
+            regions.push_back({owner[i], ops.components()[owner[i]].area});
+        }
+    if (regions.empty()) return;
+    // Found before (its window holds a blob), so found again.
+    const std::size_t n = measure_found(ops, binary, labels);
+    for (std::size_t j = 0; j < n; ++j)
+        blobs[static_cast<std::size_t>(candidate[found[j].region])] = found[j].blob;
 }
 
 std::span<const std::uint8_t> GestureSegmenter::mask() const {

@@ -218,6 +218,10 @@ ENDOTOWER_WIDE_VECTORS void MaskOps::smooth_at_least(BytePlane in, int threshold
 }
 
 int MaskOps::label(BytePlane m, std::int32_t* labels) {
+    return label(m, labels, static_cast<std::size_t>(m.width), 0, 0);
+}
+
+int MaskOps::label(BytePlane m, std::int32_t* labels, std::size_t stride, int x0, int y0) {
     // Runs of set pixels, not pixels: a run's provisional label is its number + 1 in
     // raster order, and it joins every run of the row above that it touches
     // (8-connected: overlapping or meeting at a corner). A union keeps the smaller label,
@@ -255,17 +259,25 @@ int MaskOps::label(BytePlane m, std::int32_t* labels) {
     std::int32_t n = 1;
     for (std::int32_t i = 1; i <= count; ++i) parent[i] = parent[i] == i ? n++ : parent[parent[i]];
     components_.assign(static_cast<std::size_t>(n), Component{w, h, -1, -1, 0});
-    std::memset(labels, 0, sizeof(std::int32_t) * static_cast<std::size_t>(w) * h);
+    if (stride == static_cast<std::size_t>(w))
+        std::memset(labels, 0, sizeof(std::int32_t) * static_cast<std::size_t>(w) * h);
+    else
+        for (int y = 0; y < h; ++y) std::fill_n(labels + y * stride, w, 0);
     for (std::int32_t i = 0; i < count; ++i) {
         const Run& run = runs[i];
         const std::int32_t lab = parent[i + 1];
-        std::fill(labels + static_cast<std::size_t>(run.y) * w + run.start,
-                  labels + static_cast<std::size_t>(run.y) * w + run.end, lab);
+        std::fill(labels + static_cast<std::size_t>(run.y) * stride + run.start,
+                  labels + static_cast<std::size_t>(run.y) * stride + run.end, lab);
         Component& c = components_[lab];
         c.area += run.end - run.start;
         c.left = std::min(c.left, run.start), c.right = std::max(c.right, run.end - 1);
         c.top = std::min(c.top, run.y), c.bottom = std::max(c.bottom, run.y);
     }
+    if (x0 != 0 || y0 != 0)
+        for (std::size_t i = 1; i < components_.size(); ++i) {
+            Component& c = components_[i];
+            c.left += x0, c.right += x0, c.top += y0, c.bottom += y0;
+        }
     return n;
 }
 

@@ -150,6 +150,29 @@ TEST_F(Gestures, TrainGesturesWritesAModelThatLoadsAndRefusesBadInput) {
     EXPECT_NE(
         slurp(dir() / "out.err").find("--threshold needs a whole number in 1..255, got '256'"),
         std::string::npos);
+    // The one-tool mask: above the mask threshold, and a model's own when measuring it.
+    EXPECT_EQ(run("train-gestures --scene " + train.string() + " --threshold 170 " +
+                  "--single-threshold 170 --out " + model.string() + " --tool-model " + kModels +
+                  "tool_likelihood.bin"),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err")
+                  .find("--single-threshold 170 must be above the mask threshold 170"),
+              std::string::npos)
+        << slurp(dir() / "out.err");
+    EXPECT_EQ(run("train-gestures --model " + model.string() + " --single-threshold 190 " +
+                  "--tool-model " + kModels + "tool_likelihood.bin --test " + train.string()),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err")
+                  .find("--single-threshold 190: the model " + model.string() +
+                        " was trained with no single-tool threshold"),
+              std::string::npos)
+        << slurp(dir() / "out.err");
+    EXPECT_EQ(run("train-gestures --scene " + train.string() + " --segmentation morphology " +
+                  "--single-threshold 190 --out " + model.string()),
+              2);
+    EXPECT_NE(slurp(dir() / "out.err").find("--single-threshold is for likelihood segmentation"),
+              std::string::npos)
+        << slurp(dir() / "out.err");
     vision::GestureClassifier c;
     std::string error;
     ASSERT_TRUE(c.load(model.string(), error)) << error;
@@ -275,7 +298,8 @@ TEST_F(Gestures, CorruptPixelModelDisablesGesturesNotTheVideo) {
 // (count and tips, every frame, and each region's "read": the network's label and
 // confidence on its features) are those of the segmenter run here at that threshold,
 // for the shipped networks stored once with threshold 128 and once with 200 (which
-// give different regions here: checked, so the comparison can tell them apart).
+// give different regions here: checked, so the comparison can tell them apart), and with
+// the two masks 170 and 190 (one tool read on the second: GestureSegmenterParams).
 TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
     const fs::path rec = scene("fig322_grasper_orientations.yaml");
     const std::string shipped = slurp(kModels + "gestures.yml");
@@ -285,19 +309,22 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
     vision::ToolLikelihood pixels;
     std::string error;
     ASSERT_TRUE(pixels.load(kModels + "gesture_tool_likelihood.bin", error)) << error;
-    std::vector<std::vector<std::array<double, 2>>> tips_at[2];
+    std::vector<std::vector<std::array<double, 2>>> tips_at[3];
     int overruled = 0, read_any = 0;  // regions read as a gesture: all, and set to none
-    for (const int threshold : {128, 200}) {
+    const struct { int threshold, single; } masks[] = {{128, 0}, {200, 0}, {170, 190}};
+    for (std::size_t m = 0; m < std::size(masks); ++m) {
+        const int threshold = masks[m].threshold, single = masks[m].single;
         const std::string name = "t" + std::to_string(threshold);
         const fs::path model = dir() / (name + ".yml");
-        std::ofstream(model) << test::edited_gesture_model(
-            shipped, third,
-            threshold == 128 ? "segmentation likelihood"
-                             : "segmentation likelihood threshold " + std::to_string(threshold));
+        std::string line3 = "segmentation likelihood";
+        if (threshold != 128) line3 += " threshold " + std::to_string(threshold);
+        if (single != 0) line3 += " single " + std::to_string(single);
+        std::ofstream(model) << test::edited_gesture_model(shipped, third, line3);
         vision::GestureClassifier classifier;
         ASSERT_TRUE(classifier.load(model.string(), error)) << error;
         ASSERT_EQ(classifier.segmentation_threshold(), threshold);
         ASSERT_EQ(classifier.segmenter_params().threshold, threshold);
+        ASSERT_EQ(classifier.segmenter_params().single_threshold, single);
         const fs::path trace = dir() / (name + "_trace.jsonl");
         const fs::path b = dir() / ("board_" + name);
         fs::create_directories(b);
@@ -309,7 +336,7 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
         vision::GestureSegmenter segmenter(&pixels, classifier.segmenter_params());
         std::ifstream lines(trace);
         std::string l;
-        auto& tips = tips_at[threshold == 128 ? 0 : 1];
+        auto& tips = tips_at[m];
         for (int frame = 0; std::getline(lines, l); ++frame) {
             char png[32];
             std::snprintf(png, sizeof png, "%06d.png", frame);
@@ -350,9 +377,11 @@ TEST_F(Gestures, TheFirmwareSegmentsWithTheModelsThreshold) {
         EXPECT_EQ(tips.size(), 28u);
     }
     EXPECT_NE(tips_at[0], tips_at[1]);
+    EXPECT_NE(tips_at[2], tips_at[0]);
+    EXPECT_NE(tips_at[2], tips_at[1]);
     std::printf("regions read as a gesture: %d, set to none by the stage's rules: %d\n", read_any,
                 overruled);
-    EXPECT_GT(read_any, 40);
+    EXPECT_GT(read_any, 60);
 }
 
 TEST_F(Gestures, EvalConfusionOnARenderedSuite) {

@@ -215,7 +215,8 @@ TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
 // same blobs, in the same order, field for field. Frame sizes: the 1/3 block mean in two
 // equal halves (1920x1080), in unequal ones (1920x1083: 361 rows), and a non-integer
 // factor (1000x562: AreaMean's general path before the bands); frames with more regions
-// than kMaxBlobs, so some are rejected and some left unmeasured.
+// than kMaxBlobs, so some are rejected and some left unmeasured. With one mask and with
+// the one-tool mask (single_threshold 190, whose regions the threads share too).
 TEST(GestureSegmenterThreads, TheHelperGivesWhatOneThreadGives) {
     const std::string root = ENDOTOWER_SOURCE_DIR;
     std::string error;
@@ -230,57 +231,148 @@ TEST(GestureSegmenterThreads, TheHelperGivesWhatOneThreadGives) {
                           {"surgery_motion", 1000, 562, 8, 37},
                           {"two_tools_crossing", 1920, 1080, 6, 20}};
     int compared = 0, crowded = 0;
-    for (const Case& c : cases) {
-        scene::Scenario scenario;
-        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
-                                         scenario, error))
-            << error;
-        scenario.width = c.width;
-        scenario.height = c.height;
-        scene::SceneRenderer renderer;
-        ASSERT_TRUE(renderer.init(scenario, 5, error)) << error;
-        GestureSegmenterParams one, two;
-        one.threads = 1;
-        one.profile = two.profile = true;
-        GestureSegmenter single(&model, one), helped(&model, two);
-        const hal::FrameFormat fmt{c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
-        single.configure(fmt);
-        helped.configure(fmt);
-        scene::Image image;
-        scene::FrameTruth truth;
-        for (int k = 0; k < c.frames; ++k) {
-            renderer.render(k * c.step, image, truth);
-            hal::Frame f;
-            f.format = fmt;
-            f.data = image.bgr.data();
-            std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{}, b{};
-            const std::size_t na = single.segment(f, a), nb = helped.segment(f, b);
-            SCOPED_TRACE(std::string(c.scenario) + " frame " + std::to_string(k * c.step));
-            ASSERT_EQ(na, nb);
-            ASSERT_TRUE(std::equal(single.mask().begin(), single.mask().end(),
-                                   helped.mask().begin(), helped.mask().end()));
-            for (std::size_t i = 0; i < na; ++i) {
-                EXPECT_EQ(a[i].tip.x, b[i].tip.x);
-                EXPECT_EQ(a[i].tip.y, b[i].tip.y);
-                EXPECT_EQ(a[i].radius_px, b[i].radius_px);
-                EXPECT_EQ(a[i].entries, b[i].entries);
-                EXPECT_EQ(a[i].arms, b[i].arms);
-                EXPECT_EQ(a[i].thin_arms, b[i].thin_arms);
-                EXPECT_EQ(a[i].features.as_vector(), b[i].features.as_vector());
+    for (const int single_threshold : {0, 190})
+        for (const Case& c : cases) {
+            scene::Scenario scenario;
+            ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
+                                             scenario, error))
+                << error;
+            scenario.width = c.width;
+            scenario.height = c.height;
+            scene::SceneRenderer renderer;
+            ASSERT_TRUE(renderer.init(scenario, 5, error)) << error;
+            GestureSegmenterParams one, two;
+            one.threads = 1;
+            one.profile = two.profile = true;
+            one.single_threshold = two.single_threshold = single_threshold;
+            GestureSegmenter single(&model, one), helped(&model, two);
+            const hal::FrameFormat fmt{c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
+            single.configure(fmt);
+            helped.configure(fmt);
+            scene::Image image;
+            scene::FrameTruth truth;
+            for (int k = 0; k < c.frames; ++k) {
+                renderer.render(k * c.step, image, truth);
+                hal::Frame f;
+                f.format = fmt;
+                f.data = image.bgr.data();
+                std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{}, b{};
+                const std::size_t na = single.segment(f, a), nb = helped.segment(f, b);
+                SCOPED_TRACE(std::string(c.scenario) + " frame " + std::to_string(k * c.step) +
+                             " single_threshold " + std::to_string(single_threshold));
+                ASSERT_EQ(na, nb);
+                ASSERT_TRUE(std::equal(single.mask().begin(), single.mask().end(),
+                                       helped.mask().begin(), helped.mask().end()));
+                for (std::size_t i = 0; i < na; ++i) {
+                    EXPECT_EQ(a[i].tip.x, b[i].tip.x);
+                    EXPECT_EQ(a[i].tip.y, b[i].tip.y);
+                    EXPECT_EQ(a[i].radius_px, b[i].radius_px);
+                    EXPECT_EQ(a[i].entries, b[i].entries);
+                    EXPECT_EQ(a[i].arms, b[i].arms);
+                    EXPECT_EQ(a[i].thin_arms, b[i].thin_arms);
+                    EXPECT_EQ(a[i].features.as_vector(), b[i].features.as_vector());
+                }
+                // Regions: the mask's 8-connected parts of at least the minimum area.
+                const int w = single.mask_width(), h = static_cast<int>(single.mask().size()) / w;
+                const cv::Mat mask(h, w, CV_8U, const_cast<std::uint8_t*>(single.mask().data()));
+                cv::Mat labels, stats, centroids;
+                const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8);
+                int regions = 0;
+                for (int i = 1; i < n; ++i)
+                    regions += stats.at<int>(i, cv::CC_STAT_AREA) >= one.min_area_fraction * w * h;
+                crowded += regions > static_cast<int>(GestureSegmenter::kMaxBlobs);
+                compared += static_cast<int>(na);
             }
-            // Regions: the mask's 8-connected parts of at least the minimum area.
-            const int w = single.mask_width(), h = static_cast<int>(single.mask().size()) / w;
-            const cv::Mat mask(h, w, CV_8U, const_cast<std::uint8_t*>(single.mask().data()));
-            cv::Mat labels, stats, centroids;
-            const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8);
-            int regions = 0;
-            for (int i = 1; i < n; ++i)
-                regions += stats.at<int>(i, cv::CC_STAT_AREA) >= one.min_area_fraction * w * h;
-            crowded += regions > static_cast<int>(GestureSegmenter::kMaxBlobs);
-            compared += static_cast<int>(na);
         }
-    }
     std::printf("compared %d blobs, %d frames with more regions than blobs\n", compared, crowded);
-    EXPECT_GE(compared, 20);  // 28 on x86-64
+    EXPECT_GE(compared, 40);  // 56 on x86-64
     EXPECT_GT(crowded, 0);
+}
+
+namespace {
+
+bool same_blob(const GestureBlob& a, const GestureBlob& b) {
+    return a.tip.x == b.tip.x && a.tip.y == b.tip.y && a.radius_px == b.radius_px &&
+           a.entries == b.entries && a.arms == b.arms && a.thin_arms == b.thin_arms &&
+           a.features.as_vector() == b.features.as_vector();
+}
+
+}  // namespace
+
+// Two masks (single_threshold above threshold): a region entering twice (crossing jaws)
+// gives the blob the first mask alone gives, field for field; a region entering once
+// gives the blob that a segmenter at the second threshold alone measures for the largest
+// of its regions inside it (exactly: the same pixels), or, where that region is no tool's
+// tip, the first mask's. Frames of one tool (fig. 3.22), of crossing jaws (fig. 3.23) and of
+// two tools at work (surgery_motion) at 1920x1080, the shipped thresholds 170 and 190, and
+// 170 with a second mask at 255, which keeps too little of a tool for a tip: the first
+// mask's blob then, field for field.
+TEST(GestureSegmenterTwoMasks, OneToolIsReadOnTheSecondMaskCrossingsOnTheFirst) {
+    const std::string root = ENDOTOWER_SOURCE_DIR;
+    std::string error;
+    ToolLikelihood model;
+    ASSERT_TRUE(model.load(root + "/board/sim/models/gesture_tool_likelihood.bin", error)) << error;
+    int crossings = 0, replaced = 0, changed = 0, kept = 0, kept_at_255 = 0;
+    for (const int single : {190, 255})
+        for (const char* name : {"fig322_scissors_orientations", "fig322_grasper_orientations",
+                                 "fig323_double_gestures", "surgery_motion"}) {
+            GestureSegmenterParams first, second, both;
+            first.profile = second.profile = both.profile = true;
+            first.threshold = both.threshold = 170;
+            second.threshold = both.single_threshold = single;
+            scene::Scenario scenario;
+            ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + name + ".yaml",
+                                             scenario, error))
+                << error;
+            scenario.width = 1920;
+            scenario.height = 1080;
+            scene::SceneRenderer renderer;
+            ASSERT_TRUE(renderer.init(scenario, 7, error)) << error;
+            GestureSegmenter at_first(&model, first), at_second(&model, second), two(&model, both);
+            const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
+            for (GestureSegmenter* g : {&at_first, &at_second, &two}) g->configure(fmt);
+            scene::Image image;
+            scene::FrameTruth truth;
+            const int step = scenario.frames > 100 ? 97 : 3;
+            for (int frame = 1; frame < scenario.frames; frame += step) {
+                renderer.render(frame, image, truth);
+                hal::Frame f;
+                f.format = fmt;
+                f.data = image.bgr.data();
+                std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{}, b{}, h{};
+                const std::size_t na = at_first.segment(f, a), nb = at_second.segment(f, b),
+                                  nh = two.segment(f, h);
+                SCOPED_TRACE(std::string(name) + " frame " + std::to_string(frame) +
+                             " second mask " + std::to_string(single));
+                // The same regions, in the same order: the first mask's.
+                ASSERT_EQ(nh, na);
+                ASSERT_TRUE(std::equal(two.mask().begin(), two.mask().end(),
+                                       at_first.mask().begin(), at_first.mask().end()));
+                for (std::size_t i = 0; i < na; ++i) {
+                    if (a[i].entries == 2) {
+                        EXPECT_TRUE(same_blob(h[i], a[i])) << "crossing " << i;
+                        ++crossings;
+                        continue;
+                    }
+                    EXPECT_EQ(h[i].entries, 1);
+                    bool from_second = false;
+                    for (std::size_t j = 0; j < nb; ++j) from_second |= same_blob(h[i], b[j]);
+                    if (from_second) {
+                        ++replaced;
+                        changed += !same_blob(h[i], a[i]);
+                        continue;
+                    }
+                    EXPECT_TRUE(same_blob(h[i], a[i])) << "one tool " << i;
+                    ++(single == 255 ? kept_at_255 : kept);
+                }
+            }
+        }
+    std::printf(
+        "crossings %d, one tool from the second mask %d (%d unlike the first's), kept %d, "
+        "kept at 255 %d\n",
+        crossings, replaced, changed, kept, kept_at_255);
+    EXPECT_GE(crossings, 20);    // 28 on x86-64
+    EXPECT_GE(replaced, 25);     // 37
+    EXPECT_GE(changed, 25);      // 37: the second mask is another shape
+    EXPECT_GE(kept_at_255, 25);  // 37
 }

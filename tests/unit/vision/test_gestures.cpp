@@ -478,6 +478,26 @@ TEST(GestureClassifier, CorruptOrWrongModelFilesAreRefused) {
 // The likelihood segmentation's mask threshold is part of the model: written when it is
 // not the default (so a default model's bytes are those of the files written before
 // the threshold was stored), read back, and refused when malformed.
+namespace {
+
+// `model` with its line 3 `line` replaced by each of `bad`: refused, the line quoted whole.
+void expect_line3_refused(const std::string& model, const std::string& line,
+                          std::initializer_list<const char*> bad) {
+    for (const char* b : bad) {
+        GestureClassifier r;
+        std::string error;
+        EXPECT_FALSE(r.parse(edited_model(model, line, b), "m.yml", error)) << b;
+        EXPECT_NE(error.find("m.yml: line 3: expected 'segmentation likelihood threshold N' "
+                             "(1..255), optionally followed by 'single M' (N < M <= 255), got '" +
+                             std::string(b) + "'"),
+                  std::string::npos)
+            << error;
+        EXPECT_FALSE(r.trained());
+    }
+}
+
+}  // namespace
+
 TEST(GestureClassifier, TheSegmentationThresholdTravelsWithTheModel) {
     const auto samples = synthetic_samples(4);
     GestureTrainParams p;
@@ -511,20 +531,72 @@ TEST(GestureClassifier, TheSegmentationThresholdTravelsWithTheModel) {
     EXPECT_FALSE(two.retrain_two_tool(samples, p, error));
     EXPECT_NE(error.find("not the model's"), std::string::npos) << error;
 
-    const std::string line = "segmentation likelihood threshold 170";
-    for (const char* bad :
-         {"segmentation likelihood threshold 0", "segmentation likelihood threshold 256",
-          "segmentation likelihood threshold x", "segmentation likelihood threshold 170 1",
-          "segmentation likelihood limit 170", "segmentation morphology threshold 170"}) {
-        GestureClassifier r;
-        EXPECT_FALSE(r.parse(edited_model(b, line, bad), "m.yml", error)) << bad;
-        EXPECT_NE(error.find("m.yml: line 3: expected 'segmentation likelihood threshold N' "
-                             "(1..255), got '" +
-                             std::string(bad) + "'"),
-                  std::string::npos)
-            << error;
-        EXPECT_FALSE(r.trained());
+    expect_line3_refused(
+        b, "segmentation likelihood threshold 170",
+        {"segmentation likelihood threshold 0", "segmentation likelihood threshold 256",
+         "segmentation likelihood threshold x", "segmentation likelihood threshold 170 1",
+         "segmentation likelihood limit 170", "segmentation morphology threshold 170"});
+}
+
+// The one-tool mask's threshold (GestureSegmenterParams::single_threshold) travels with the
+// model too: line 3 "... threshold N single M", M above N; the segmenter the model
+// implies has both; a model without it segments with one mask as before.
+TEST(GestureClassifier, TheOneToolMaskThresholdTravelsWithTheModel) {
+    const auto samples = synthetic_samples(4);
+    GestureTrainParams p;
+    p.features = GestureFeatureSet::kExtended;
+    p.iterations = 200;
+    p.two_tool_network = true;
+    p.threshold = 170;
+    p.single_threshold = 190;
+    std::string error;
+    GestureClassifier two_masks;
+    ASSERT_TRUE(two_masks.train(samples, p, error)) << error;
+    EXPECT_EQ(two_masks.single_tool_threshold(), 190);
+    EXPECT_EQ(two_masks.segmenter_params().threshold, 170);
+    EXPECT_EQ(two_masks.segmenter_params().single_threshold, 190);
+    const std::string m = two_masks.serialise();
+    EXPECT_NE(
+        m.find(
+            "ETGES1\nfeatures extended\nsegmentation likelihood threshold 170 single 190\n%YAML"),
+        std::string::npos);
+    GestureClassifier back;
+    ASSERT_TRUE(back.parse(m, "m.yml", error)) << error;
+    EXPECT_EQ(back.segmentation_threshold(), 170);
+    EXPECT_EQ(back.single_tool_threshold(), 190);
+    EXPECT_EQ(back.serialise(), m);
+    // At the default mask threshold the line still names it (the parser needs it first).
+    p.threshold = 128;
+    GestureClassifier at_even_odds;
+    ASSERT_TRUE(at_even_odds.train(samples, p, error)) << error;
+    EXPECT_NE(
+        at_even_odds.serialise().find("segmentation likelihood threshold 128 single 190\n%YAML"),
+        std::string::npos);
+    // Not above the mask threshold, or morphology: no second mask, nothing written.
+    for (const int single : {128, 100}) {
+        p.single_threshold = single;
+        GestureClassifier none;
+        ASSERT_TRUE(none.train(samples, p, error)) << error;
+        EXPECT_EQ(none.single_tool_threshold(), 0);
+        EXPECT_EQ(none.segmenter_params().single_threshold, 0);
+        EXPECT_NE(none.serialise().find("segmentation likelihood\n%YAML"), std::string::npos);
     }
+    // The two-tool network is retrained only with the model's own masks.
+    p.threshold = 170;
+    p.single_threshold = 0;
+    EXPECT_FALSE(two_masks.retrain_two_tool(samples, p, error));
+    EXPECT_NE(error.find("not the model's"), std::string::npos) << error;
+    p.single_threshold = 190;
+    EXPECT_TRUE(two_masks.retrain_two_tool(samples, p, error)) << error;
+
+    expect_line3_refused(
+        m, "segmentation likelihood threshold 170 single 190",
+        {"segmentation likelihood threshold 170 single 170",
+         "segmentation likelihood threshold 170 single 150",
+         "segmentation likelihood threshold 170 single 256",
+         "segmentation likelihood threshold 170 single",
+         "segmentation likelihood threshold 170 single 190 x",
+         "segmentation likelihood threshold 170 double 190", "segmentation likelihood single 190"});
 }
 
 // The topology features: 11 inputs (the holes among them), the eighth class, two

@@ -112,6 +112,39 @@ TEST(MaskOps, LabelsAreOpenCvsComponentsWithTheirStats) {
     }
 }
 
+// A part of a larger image labelled in place: the labels written into the larger
+// image's rows (nothing outside the part touched), the boxes in its coordinates; the
+// same labels and stats as the part labelled on its own.
+TEST(MaskOps, APartIsLabelledInPlaceWithItsBoxesInTheWholeImage) {
+    cv::Mat m = blobs(320, 200, 31);
+    const cv::Rect part(37, 21, 150, 120);
+    cv::Mat crop = m(part).clone();  // labelled alone
+    MaskOps alone, in_place;
+    alone.configure(m.cols, m.rows);
+    in_place.configure(m.cols, m.rows);
+    cv::Mat want(crop.size(), CV_32S), got(m.size(), CV_32S, cv::Scalar(-7));
+    const int n = alone.label(plane(crop), want.ptr<std::int32_t>(0));
+    cv::Mat view = m(part);
+    const BytePlane p{view.data, view.cols, view.rows, static_cast<std::size_t>(view.step)};
+    ASSERT_EQ(in_place.label(p, got.ptr<std::int32_t>(part.y) + part.x,
+                             static_cast<std::size_t>(m.cols), part.x, part.y),
+              n);
+    ASSERT_GT(n, 3);
+    EXPECT_EQ(cv::norm(got(part), want, cv::NORM_INF), 0.0);
+    cv::Mat outside = got.clone();
+    outside(part).setTo(-7);
+    EXPECT_EQ(cv::countNonZero(outside != -7), 0);
+    for (int a = 1; a < n; ++a) {
+        const Component& w = alone.components()[a];
+        const Component& g = in_place.components()[a];
+        EXPECT_EQ(g.area, w.area);
+        EXPECT_EQ(g.left, w.left + part.x);
+        EXPECT_EQ(g.right, w.right + part.x);
+        EXPECT_EQ(g.top, w.top + part.y);
+        EXPECT_EQ(g.bottom, w.bottom + part.y);
+    }
+}
+
 // The most runs a mask can have (every other pixel of every row set, odd width):
 // label() works on runs, sized for ceil(w / 2) of them a row. A checkerboard is one
 // 8-connected component; every other column alone is one per column.

@@ -14,8 +14,9 @@
 // kProfile (shipped) = a topology model and a third network, 31-20-8, on those eleven
 // and the profile across the shaft (GestureFeatures), whose outputs are averaged with
 // the single-tool network's. The segmentation method the model was trained on, and for
-// the likelihood method its mask threshold (`threshold`, default 128 = even odds), are
-// stored with it, so the firmware segments the same way.
+// the likelihood method its mask threshold (`threshold`, default 128 = even odds) and
+// one tool's (`single_threshold`, GestureSegmenterParams), are stored with it, so the
+// firmware segments the same way.
 //
 // Two networks (`two_tool_network`, extended, topology or profile): a region with two rim
 // entries (GestureBlob::entries 2: two tools meeting, or one along the rim) is read first
@@ -30,7 +31,8 @@
 //
 // File: "ETGES1\n", "features book|extended|topology|profile\n",
 // "segmentation morphology|likelihood\n" (likelihood with a threshold other than 128:
-// "segmentation likelihood threshold N\n", 1 <= N <= 255), the network as OpenCV
+// "segmentation likelihood threshold N\n", 1 <= N <= 255; with a one-tool mask
+// "segmentation likelihood threshold N single M\n", N < M <= 255), the network as OpenCV
 // FileStorage YAML (node opencv_ml_ann_mlp; the two-tool network, when there is one, node
 // two_tool_ann_mlp; the profile network, with the profile features only and then required,
 // profile_ann_mlp), then "fnv1a " and the FNV-1a 64-bit hash of everything before it as 16
@@ -84,6 +86,7 @@ struct GestureTrainParams {
     GestureFeatureSet features = GestureFeatureSet::kBook;
     GestureSegmentation segmentation = GestureSegmentation::kLikelihood;
     int threshold = 128;  // likelihood: the mask threshold (GestureSegmenterParams::threshold)
+    int single_threshold = 0;  // likelihood: one tool's mask (GestureSegmenterParams); 0: none
     int hidden = 20;
     int iterations = 3000;
     bool two_tool_network = false;  // a second network for two-tool regions (extended)
@@ -91,6 +94,14 @@ struct GestureTrainParams {
 };
 
 constexpr int kNotATool = kGestureLabelCount;  // the extended classifier's eighth class
+
+// The one-tool mask's threshold `p` implies: 0 where there is none (morphology, or not
+// above the mask threshold).
+constexpr int single_mask_threshold(const GestureTrainParams& p) {
+    return p.segmentation == GestureSegmentation::kLikelihood && p.single_threshold > p.threshold
+               ? p.single_threshold
+               : 0;
+}
 
 // The segmenter the networks of `p` read: its method and threshold, and the profile
 // measured for the profile features; GestureSegmenterParams' defaults otherwise.
@@ -118,6 +129,8 @@ public:
     GestureSegmentation segmentation() const { return segmentation_; }
     // The likelihood segmentation's mask threshold the model was trained with.
     int segmentation_threshold() const { return threshold_; }
+    // The one-tool mask's threshold (GestureSegmenterParams::single_threshold); 0: none.
+    int single_tool_threshold() const { return single_threshold_; }
     // The segmenter the model was trained on (gesture_segmenter_params of its settings).
     GestureSegmenterParams segmenter_params() const;
 
@@ -145,6 +158,7 @@ private:
     GestureFeatureSet features_ = GestureFeatureSet::kBook;
     GestureSegmentation segmentation_ = GestureSegmentation::kLikelihood;
     int threshold_ = 128;
+    int single_threshold_ = 0;
 };
 
 }  // namespace endotower::vision

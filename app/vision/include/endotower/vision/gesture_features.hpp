@@ -67,6 +67,9 @@ GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, in
 // The same with the caller's tracer (reserve()d for the mask's size): no allocation.
 GestureFeatures measure_gesture_features(const std::uint8_t* mask, int width, int height,
                                          int stride, ContourTracer& tracer);
+// Whether measure_gesture_features() would give valid features, without measuring them.
+bool gesture_features_valid(const std::uint8_t* mask, int width, int height, int stride,
+                            ContourTracer& tracer);
 // Fills f's profile: the tip at (tip_x, tip_y) in mask pixels, (axis_x, axis_y) the unit
 // direction from the tip back along the shaft, `radius` the shaft's radius (pixels).
 // Each station samples the line across the axis every half pixel for 8 radii either side

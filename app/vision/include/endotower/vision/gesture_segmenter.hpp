@@ -12,6 +12,8 @@
 //       probability (ToolLikelihood, borrowed), 5x5 Gaussian, threshold `threshold`
 //       (128 = even odds), 3x3 opening;
 //     both then only inside the lit field of view (as LikelihoodToolTracker);
+//     kLikelihood with `single_threshold` above `threshold` (default 0: off): a second
+//     mask of the same smoothed probability at that threshold, for one tool (below, 4);
 //  2. 8-connected regions of at least `min_area_fraction` (0.002) of the picture that
 //     reach within `border_touch_fraction` (0.06) x width of its edge (tools enter
 //     from outside the picture) and whose length (principal axis, second moments) is
@@ -26,7 +28,13 @@
 //     and, when `profile` is set, the profile across the axis from the tip to its
 //     entry, in units of r; else those stay 0); the arms: the region's parts that
 //     cross the window's edge, and for a region entering twice also those crossing
-//     the circle of `window_radii` x the thinner entry's radius (`thin_arms`).
+//     the circle of `window_radii` x the thinner entry's radius (`thin_arms`);
+//  4. with `single_threshold`: a region that enters once is measured (3) on the largest
+//     region of the second mask inside it (the mask in the box of such regions alone) if
+//     that is a tool's tip entering once, else on the first mask; 3 only checks that its
+//     tip window holds a blob. The higher threshold joins less of the tissue's sheen to
+//     a lone tool's jaws; crossing tools stay the first mask's (docs/gestures.md, "Two
+//     masks").
 // Output: up to kMaxBlobs blobs with the tip in the input frame's pixels.
 // Needs a BGR24 frame; anything else gives no blobs. No exceptions; buffers are set up
 // in configure(), and with `threads` = 2 a helper thread that, inside segment(), takes
@@ -57,6 +65,7 @@ struct GestureSegmenterParams {
     int small_element = 3;
     int high_threshold = 200;
     int threshold = 128;
+    int single_threshold = 0;  // one tool's mask (4); 0 or <= threshold: none
     double min_area_fraction = 0.002;
     double border_touch_fraction = 0.06;
     double min_elongation = 2.5;
@@ -85,7 +94,8 @@ public:
     void configure(const hal::FrameFormat& format);
     std::size_t segment(const hal::Frame& frame, std::span<GestureBlob, kMaxBlobs> out);
     // The last segment()'s tool mask at the analysis size (before the region filter):
-    // row-major, mask_width() bytes a row, 0 or 255; empty before configure().
+    // row-major, mask_width() bytes a row, 0 or 255 (the first mask, at `threshold`); empty
+    // before configure().
     std::span<const std::uint8_t> mask() const;
     int mask_width() const;
 

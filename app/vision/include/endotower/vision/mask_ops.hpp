@@ -59,6 +59,9 @@ public:
     void smooth_at_least(BytePlane in, int threshold, BytePlane and_mask, BytePlane out,
                          BytePlane smoothed = {});
     int label(BytePlane mask, std::int32_t* labels);  // labels: width x height, packed
+    // The same for a part of a larger image: `labels` rows `stride` apart, and the
+    // components' boxes offset by (x0, y0), the part's place in that image.
+    int label(BytePlane mask, std::int32_t* labels, std::size_t stride, int x0, int y0);
     const std::vector<Component>& components() const { return components_; }  // per label
     void chamfer(BytePlane mask, int x0, int y0, int x1, int y1, std::uint32_t* out);
     // Sizes chamfer()'s buffer alone, for images up to width x height: a MaskOps that
