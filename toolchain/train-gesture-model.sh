@@ -33,7 +33,7 @@ case " $* " in
   *" --threshold "* | *" morphology "*) ;;
   *) set -- --threshold 170 "$@" ;;
 esac
-# And the one-tool mask's (a region entering once is measured again on the mask at 190,
+# And the one-tool mask's (a region entering once is measured on the mask at 190,
 # which joins less sheen to a lone tool's jaws; crossings stay at 170: docs/gestures.md,
 # "Two masks"); --single-threshold 0 for one mask, as the models before 2026-11-30.
 case " $* " in

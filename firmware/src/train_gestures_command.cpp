@@ -45,7 +45,7 @@ void print_help() {
         "                     probability, 1..255 (default 128 = even odds; stored in the\n"
         "                     model, so the firmware segments the same way)\n"
         "  --single-threshold M  likelihood: a second mask at M (above the threshold) on\n"
-        "                     which a region that enters once (one tool) is measured again\n"
+        "                     which a region that enters once (one tool) is measured\n"
         "                     (default 0: none; stored in the model)\n"
         "  --tool-model FILE  the tool likelihood model (needed for likelihood segmentation)\n"
         "  --every N          use every N-th frame (default 1)\n"
