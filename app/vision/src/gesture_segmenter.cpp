@@ -100,6 +100,10 @@ struct GestureSegmenter::Work {
     // the one-tool mask (`single_threshold`) from its region's largest part there, or
     // on the first mask where that part is no tool's tip entering once.
     void measure_single(const GestureSegmenterParams& p, std::span<GestureBlob> blobs);
+    // The one-tool mask and its regions (single_binary, single_labels, single_ops) in
+    // the box [x0, x1] x [y0, y1] of the first mask's pixels: as over the whole picture
+    // for every region of it inside one of the first mask's regions there.
+    void single_mask_in_box(const GestureSegmenterParams& p, int x0, int y0, int x1, int y1);
 };
 
 namespace {
@@ -107,12 +111,6 @@ namespace {
 // A second mask for one tool (GestureSegmenterParams::single_threshold).
 bool single_mask(const GestureSegmenterParams& p) {
     return p.method == GestureSegmentation::kLikelihood && p.single_threshold > p.threshold;
-}
-
-// The 3x3 opening of `m`, in place.
-void open_in_place(MaskOps& o, cv::Mat& m) {
-    const BytePlane b{m.data, m.cols, m.rows, static_cast<std::size_t>(m.step)};
-    o.open3(b, b);
 }
 
 // The region's arms leaving the tip window: runs of region pixels on the circle of
@@ -503,7 +501,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
             keep_lit(w.lit.ptr<std::uint8_t>(y), w.blurred.ptr<std::uint8_t>(y), W);
         w.ops.smooth_at_least(plane(w.blurred), params_.threshold, plane(w.eroded), plane(w.binary),
                               single_mask(params_) ? plane(w.smoothed) : BytePlane{});
-        open_in_place(w.ops, w.binary);
+        w.ops.open3(plane(w.binary), plane(w.binary));
     } else {
         // eq. 3.3: A - (A o B1); eq. 3.5: A + (A o B2); then a high threshold.
         cv::bitwise_not(w.gray, w.a);
@@ -535,6 +533,7 @@ std::size_t GestureSegmenter::segment(const hal::Frame& frame,
     w.params = &params_;
     w.defer_one_tool = single_mask(params_);
     const std::size_t found = std::min(w.measure_found(w.ops, w.binary, w.labels), out.size());
+    w.defer_one_tool = false;
     for (std::size_t i = 0; i < found; ++i) out[i] = w.found[i].blob;
     if (single_mask(params_)) w.measure_single(params_, out.first(found));
     return found;
@@ -561,10 +560,7 @@ void GestureSegmenter::Work::measure_single(const GestureSegmenterParams& p,
     for (std::size_t i = 0; i < blobs.size(); ++i)
         owner[i] = blobs[i].entries == 1 ? regions[found[i].region].label : 0;
     const int W = small.cols, H = small.rows;
-    // The second mask only in the box of those regions and 2 px around (what the opening
-    // reads): each region of it that lies in one of theirs lies in their box, and is
-    // the same there as over the whole picture once the ring the opening could not see
-    // whole is cleared (measure_region reads only inside a region's box and 1 px around).
+    // The second mask only in the box of those regions.
     int x0 = W, y0 = H, x1 = -1, y1 = -1;
     for (std::size_t i = 0; i < blobs.size(); ++i) {
         if (owner[i] == 0) continue;
@@ -573,25 +569,7 @@ void GestureSegmenter::Work::measure_single(const GestureSegmenterParams& p,
         x1 = std::max(x1, c.right), y1 = std::max(y1, c.bottom);
     }
     if (x1 < 0) return;
-    constexpr int kRing = 2;
-    const int bx0 = std::max(0, x0 - kRing), by0 = std::max(0, y0 - kRing);
-    const int bx1 = std::min(W - 1, x1 + kRing), by1 = std::min(H - 1, y1 + kRing);
-    const auto at_least = static_cast<std::uint8_t>(p.single_threshold);
-    for (int y = by0; y <= by1; ++y)
-        at_least_lit(smoothed.ptr<std::uint8_t>(y) + bx0, eroded.ptr<std::uint8_t>(y) + bx0,
-                     at_least, single_binary.ptr<std::uint8_t>(y) + bx0, bx1 - bx0 + 1);
-    const BytePlane plane{single_binary.ptr<std::uint8_t>(by0) + bx0, bx1 - bx0 + 1, by1 - by0 + 1,
-                          static_cast<std::size_t>(single_binary.step)};
-    single_ops.open3(plane, plane);
-    // The ring inside the picture: the opening there saw only part of its 5x5.
-    for (int y = by0; y <= by1; ++y) {
-        std::uint8_t* o = single_binary.ptr<std::uint8_t>(y);
-        const bool ring_row = (y < y0 && by0 > 0) || (y > y1 && by1 < H - 1);
-        for (int x = bx0; x <= bx1; ++x)
-            if (ring_row || (x < x0 && bx0 > 0) || (x > x1 && bx1 < W - 1)) o[x] = 0;
-    }
-    single_ops.label(plane, single_labels.ptr<std::int32_t>(by0) + bx0, static_cast<std::size_t>(W),
-                     bx0, by0);
+    single_mask_in_box(p, x0, y0, x1, y1);
     const std::vector<Component>& comps = single_ops.components();
     const double min_area = p.min_area_fraction * W * H;
     // Per blob, the largest region of the one-tool mask inside its region (the one-tool
@@ -619,7 +597,6 @@ void GestureSegmenter::Work::measure_single(const GestureSegmenterParams& p,
     }
     // Measured in full: on the second mask, or where that has no tool's tip entering
     // once inside the region, on the first, as with one mask.
-    defer_one_tool = false;
     std::array<bool, kMaxBlobs> done{};
     if (!regions.empty()) {
         const std::size_t n = measure_found(single_ops, single_binary, single_labels);
@@ -639,6 +616,34 @@ void GestureSegmenter::Work::measure_single(const GestureSegmenterParams& p,
     const std::size_t n = measure_found(ops, binary, labels);
     for (std::size_t j = 0; j < n; ++j)
         blobs[static_cast<std::size_t>(candidate[found[j].region])] = found[j].blob;
+}
+
+void GestureSegmenter::Work::single_mask_in_box(const GestureSegmenterParams& p, int x0, int y0,
+                                                int x1, int y1) {
+    // The box and 2 px around (what the opening reads): each region of the second mask
+    // that lies in one of the first's in the box lies in the box, and is the same there
+    // as over the whole picture once the ring the opening could not see whole is
+    // cleared (measure_region reads only inside a region's box and 1 px around).
+    const int W = small.cols, H = small.rows;
+    constexpr int kRing = 2;
+    const int bx0 = std::max(0, x0 - kRing), by0 = std::max(0, y0 - kRing);
+    const int bx1 = std::min(W - 1, x1 + kRing), by1 = std::min(H - 1, y1 + kRing);
+    const auto at_least = static_cast<std::uint8_t>(p.single_threshold);
+    for (int y = by0; y <= by1; ++y)
+        at_least_lit(smoothed.ptr<std::uint8_t>(y) + bx0, eroded.ptr<std::uint8_t>(y) + bx0,
+                     at_least, single_binary.ptr<std::uint8_t>(y) + bx0, bx1 - bx0 + 1);
+    const BytePlane plane{single_binary.ptr<std::uint8_t>(by0) + bx0, bx1 - bx0 + 1, by1 - by0 + 1,
+                          static_cast<std::size_t>(single_binary.step)};
+    single_ops.open3(plane, plane);
+    // The ring inside the picture: the opening there saw only part of its 5x5.
+    for (int y = by0; y <= by1; ++y) {
+        std::uint8_t* o = single_binary.ptr<std::uint8_t>(y);
+        const bool ring_row = (y < y0 && by0 > 0) || (y > y1 && by1 < H - 1);
+        for (int x = bx0; x <= bx1; ++x)
+            if (ring_row || (x < x0 && bx0 > 0) || (x > x1 && bx1 < W - 1)) o[x] = 0;
+    }
+    single_ops.label(plane, single_labels.ptr<std::int32_t>(by0) + bx0, static_cast<std::size_t>(W),
+                     bx0, by0);
 }
 
 std::span<const std::uint8_t> GestureSegmenter::mask() const {
