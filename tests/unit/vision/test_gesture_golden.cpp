@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
@@ -231,35 +232,43 @@ TEST(GestureSegmenterThreads, TheHelperGivesWhatOneThreadGives) {
                           {"surgery_motion", 1000, 562, 8, 37},
                           {"two_tools_crossing", 1920, 1080, 6, 20}};
     int compared = 0, crowded = 0;
-    for (const int single_threshold : {0, 190})
-        for (const Case& c : cases) {
-            scene::Scenario scenario;
-            ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
-                                             scenario, error))
-                << error;
-            scenario.width = c.width;
-            scenario.height = c.height;
-            scene::SceneRenderer renderer;
-            ASSERT_TRUE(renderer.init(scenario, 5, error)) << error;
+    for (const Case& c : cases) {
+        scene::Scenario scenario;
+        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
+                                         scenario, error))
+            << error;
+        scenario.width = c.width;
+        scenario.height = c.height;
+        scene::SceneRenderer renderer;
+        ASSERT_TRUE(renderer.init(scenario, 5, error)) << error;
+        // One pair of segmenters per mask setting, fed the same rendered frame (rendering
+        // a 1080p frame costs far more than segmenting it).
+        constexpr int kSingleThresholds[] = {0, 190};
+        std::vector<std::unique_ptr<GestureSegmenter>> singles, helpers;
+        const hal::FrameFormat fmt{c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
+        for (const int single_threshold : kSingleThresholds) {
             GestureSegmenterParams one, two;
             one.threads = 1;
             one.profile = two.profile = true;
             one.single_threshold = two.single_threshold = single_threshold;
-            GestureSegmenter single(&model, one), helped(&model, two);
-            const hal::FrameFormat fmt{c.width, c.height, c.width * 3, hal::PixelFormat::kBgr24};
-            single.configure(fmt);
-            helped.configure(fmt);
-            scene::Image image;
-            scene::FrameTruth truth;
-            for (int k = 0; k < c.frames; ++k) {
-                renderer.render(k * c.step, image, truth);
-                hal::Frame f;
-                f.format = fmt;
-                f.data = image.bgr.data();
+            singles.push_back(std::make_unique<GestureSegmenter>(&model, one));
+            helpers.push_back(std::make_unique<GestureSegmenter>(&model, two));
+            singles.back()->configure(fmt);
+            helpers.back()->configure(fmt);
+        }
+        scene::Image image;
+        scene::FrameTruth truth;
+        for (int k = 0; k < c.frames; ++k) {
+            renderer.render(k * c.step, image, truth);
+            hal::Frame f;
+            f.format = fmt;
+            f.data = image.bgr.data();
+            for (std::size_t m = 0; m < singles.size(); ++m) {
+                GestureSegmenter &single = *singles[m], &helped = *helpers[m];
                 std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{}, b{};
                 const std::size_t na = single.segment(f, a), nb = helped.segment(f, b);
                 SCOPED_TRACE(std::string(c.scenario) + " frame " + std::to_string(k * c.step) +
-                             " single_threshold " + std::to_string(single_threshold));
+                             " single_threshold " + std::to_string(kSingleThresholds[m]));
                 ASSERT_EQ(na, nb);
                 ASSERT_TRUE(std::equal(single.mask().begin(), single.mask().end(),
                                        helped.mask().begin(), helped.mask().end()));
@@ -279,11 +288,13 @@ TEST(GestureSegmenterThreads, TheHelperGivesWhatOneThreadGives) {
                 const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8);
                 int regions = 0;
                 for (int i = 1; i < n; ++i)
-                    regions += stats.at<int>(i, cv::CC_STAT_AREA) >= one.min_area_fraction * w * h;
+                    regions += stats.at<int>(i, cv::CC_STAT_AREA) >=
+                               GestureSegmenterParams{}.min_area_fraction * w * h;
                 crowded += regions > static_cast<int>(GestureSegmenter::kMaxBlobs);
                 compared += static_cast<int>(na);
             }
         }
+    }
     std::printf("compared %d blobs, %d frames with more regions than blobs\n", compared, crowded);
     EXPECT_GE(compared, 40);  // 56 on x86-64
     EXPECT_GT(crowded, 0);
@@ -313,45 +324,66 @@ TEST(GestureSegmenterTwoMasks, OneToolIsReadOnTheSecondMaskCrossingsOnTheFirst) 
     ToolLikelihood model;
     ASSERT_TRUE(model.load(root + "/board/sim/models/gesture_tool_likelihood.bin", error)) << error;
     int crossings = 0, replaced = 0, changed = 0, kept = 0, kept_at_255 = 0;
-    for (const int single : {190, 255})
-        for (const char* name : {"fig322_scissors_orientations", "fig322_grasper_orientations",
-                                 "fig323_double_gestures", "surgery_motion"}) {
-            GestureSegmenterParams first, second, both;
-            first.profile = second.profile = both.profile = true;
-            first.threshold = both.threshold = 170;
+    // Every frame rendered once and segmented at the first threshold alone and, for each
+    // second mask, at the second threshold alone and with both (rendering a 1080p frame
+    // costs far more than segmenting it). Lone tools are in every frame of fig. 3.22,
+    // crossings in fig. 3.23 and surgery_motion.
+    struct Case {
+        const char* scenario;
+        int step;
+    };
+    constexpr Case kCases[] = {{"fig322_scissors_orientations", 3},
+                               {"fig322_grasper_orientations", 3},
+                               {"fig323_double_gestures", 3},
+                               {"surgery_motion", 12}};
+    constexpr int kSecond[] = {190, 255};
+    const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
+    for (const Case& c : kCases) {
+        scene::Scenario scenario;
+        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
+                                         scenario, error))
+            << error;
+        scenario.width = 1920;
+        scenario.height = 1080;
+        scene::SceneRenderer renderer;
+        ASSERT_TRUE(renderer.init(scenario, 7, error)) << error;
+        GestureSegmenterParams first;
+        first.profile = true;
+        first.threshold = 170;
+        GestureSegmenter at_first(&model, first);
+        at_first.configure(fmt);
+        std::vector<std::unique_ptr<GestureSegmenter>> at_second, two;
+        for (const int single : kSecond) {
+            GestureSegmenterParams second = first, both = first;
             second.threshold = both.single_threshold = single;
-            scene::Scenario scenario;
-            ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + name + ".yaml",
-                                             scenario, error))
-                << error;
-            scenario.width = 1920;
-            scenario.height = 1080;
-            scene::SceneRenderer renderer;
-            ASSERT_TRUE(renderer.init(scenario, 7, error)) << error;
-            GestureSegmenter at_first(&model, first), at_second(&model, second), two(&model, both);
-            const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
-            for (GestureSegmenter* g : {&at_first, &at_second, &two}) g->configure(fmt);
-            scene::Image image;
-            scene::FrameTruth truth;
-            const int step = scenario.frames > 100 ? 97 : 3;
-            for (int frame = 1; frame < scenario.frames; frame += step) {
-                renderer.render(frame, image, truth);
-                hal::Frame f;
-                f.format = fmt;
-                f.data = image.bgr.data();
-                std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{}, b{}, h{};
-                const std::size_t na = at_first.segment(f, a), nb = at_second.segment(f, b),
-                                  nh = two.segment(f, h);
-                SCOPED_TRACE(std::string(name) + " frame " + std::to_string(frame) +
+            at_second.push_back(std::make_unique<GestureSegmenter>(&model, second));
+            two.push_back(std::make_unique<GestureSegmenter>(&model, both));
+            at_second.back()->configure(fmt);
+            two.back()->configure(fmt);
+        }
+        scene::Image image;
+        scene::FrameTruth truth;
+        for (int frame = 1; frame < scenario.frames; frame += c.step) {
+            renderer.render(frame, image, truth);
+            hal::Frame f;
+            f.format = fmt;
+            f.data = image.bgr.data();
+            std::array<GestureBlob, GestureSegmenter::kMaxBlobs> a{};
+            const std::size_t na = at_first.segment(f, a);
+            for (std::size_t m = 0; m < std::size(kSecond); ++m) {
+                const int single = kSecond[m];
+                std::array<GestureBlob, GestureSegmenter::kMaxBlobs> b{}, h{};
+                const std::size_t nb = at_second[m]->segment(f, b), nh = two[m]->segment(f, h);
+                SCOPED_TRACE(std::string(c.scenario) + " frame " + std::to_string(frame) +
                              " second mask " + std::to_string(single));
                 // The same regions, in the same order: the first mask's.
                 ASSERT_EQ(nh, na);
-                ASSERT_TRUE(std::equal(two.mask().begin(), two.mask().end(),
+                ASSERT_TRUE(std::equal(two[m]->mask().begin(), two[m]->mask().end(),
                                        at_first.mask().begin(), at_first.mask().end()));
                 for (std::size_t i = 0; i < na; ++i) {
                     if (a[i].entries == 2) {
                         EXPECT_TRUE(same_blob(h[i], a[i])) << "crossing " << i;
-                        ++crossings;
+                        crossings += single == 190;
                         continue;
                     }
                     EXPECT_EQ(h[i].entries, 1);
@@ -367,12 +399,13 @@ TEST(GestureSegmenterTwoMasks, OneToolIsReadOnTheSecondMaskCrossingsOnTheFirst) 
                 }
             }
         }
+    }
     std::printf(
         "crossings %d, one tool from the second mask %d (%d unlike the first's), kept %d, "
         "kept at 255 %d\n",
         crossings, replaced, changed, kept, kept_at_255);
-    EXPECT_GE(crossings, 20);    // 28 on x86-64
-    EXPECT_GE(replaced, 25);     // 37
-    EXPECT_GE(changed, 25);      // 37: the second mask is another shape
-    EXPECT_GE(kept_at_255, 25);  // 37
+    EXPECT_GE(crossings, 10);    // 14 on x86-64 (each also compared with a second mask at 255)
+    EXPECT_GE(replaced, 16);     // 22
+    EXPECT_GE(changed, 16);      // 22: the second mask is another shape
+    EXPECT_GE(kept_at_255, 16);  // 22
 }
