@@ -27,4 +27,20 @@ export ENDOTOWER_REPLAY_WATCHDOG_MS=${ENDOTOWER_REPLAY_WATCHDOG_MS:-60000}
 # cores) only with ALL=1.
 exclude='driver|command'
 [ "${ALL:-0}" = 1 ] && exclude='driver'
-ctest --test-dir "$build" -LE "$exclude" -j"$jobs" --output-on-failure --timeout 900
+# Also left out unless ALL=1: four tests that each took 2.5-4 min of the step's 14
+# (measured 2026-11-30; they are 1/100 of the tests and 1/2 of the time) and whose
+# subject the architecture cannot change:
+# - two equivalence tests of the gesture segmenter, which render 37-54 frames at 1080p
+#   and compare one segmenter with another on each (the helper thread against one
+#   thread; two masks against each mask alone). Both sides are the same arm64 code, and
+#   qemu-user runs threads with this x86-64 host's memory ordering. The segmenter's
+#   arm64 output against the values recorded on x86-64 is GestureSegmenterGolden's
+#   test, which runs here.
+# - two tests of a region's lost-and-recovered states (the region panned out of the
+#   picture and back), which re-detect SIFT over the whole frame every lost frame. The
+#   arm64 SIFT and homography are checked here by the other region tests
+#   (Graf1ToGraf3WithSiftWithinTwoPixels, FourRegionsFollowAMovingView, ...).
+# The native release, ASan and TSan suites run all four.
+emulated_skip=()
+[ "${ALL:-0}" = 1 ] || emulated_skip=(-E '^(GestureSegmenterThreads\.TheHelperGivesWhatOneThreadGives|GestureSegmenterTwoMasks\.OneToolIsReadOnTheSecondMaskCrossingsOnTheFirst|RegionTracker\.LostWhenTheRegionLeavesThePictureAndRecoveredWhenItReturns|AnchoredOverlayStage\.HiddenWhileLostBackWhenFound)$')
+ctest --test-dir "$build" -LE "$exclude" "${emulated_skip[@]}" -j"$jobs" --output-on-failure --timeout 900

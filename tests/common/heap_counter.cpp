@@ -28,12 +28,10 @@
 #if !ENDOTOWER_SANITIZED
 extern "C" {
 // glibc's own entry points, which the interposed functions forward to.
-// NOLINTBEGIN(bugprone-reserved-identifier)
 void* __libc_malloc(std::size_t);
 void* __libc_calloc(std::size_t, std::size_t);
 void* __libc_realloc(void*, std::size_t);
 void* __libc_memalign(std::size_t, std::size_t);
-// NOLINTEND(bugprone-reserved-identifier)
 }
 #endif
 

@@ -32,7 +32,6 @@ const bool kLlvmpipeOnTheCallingThread = (setenv("LP_NUM_THREADS", "0", 0), true
 }  // namespace
 
 // The name is TSan's hook, looked up by the runtime.
-// NOLINTNEXTLINE(bugprone-reserved-identifier)
 extern "C" const char* __tsan_default_suppressions() {
     return "deadlock:libgdal.so\n"
            "race:libavcodec.so\n"
