@@ -27,9 +27,9 @@ export ENDOTOWER_REPLAY_WATCHDOG_MS=${ENDOTOWER_REPLAY_WATCHDOG_MS:-60000}
 # cores) only with ALL=1.
 exclude='driver|command'
 [ "${ALL:-0}" = 1 ] && exclude='driver'
-# Also left out unless ALL=1: four tests that each took 2.5-4 min of the step's 14
-# (measured 2026-11-30; they are 1/100 of the tests and 1/2 of the time) and whose
-# subject the architecture cannot change:
+# Also left out unless ALL=1: four tests whose subject the architecture cannot change,
+# 2.2-3.8 min each here (measured 2026-11-30: 686 s of the 1675 s of test time that
+# the 423 tests took, 14 min of the step at -j2):
 # - two equivalence tests of the gesture segmenter, which render 37-54 frames at 1080p
 #   and compare one segmenter with another on each (the helper thread against one
 #   thread; two masks against each mask alone). Both sides are the same arm64 code, and

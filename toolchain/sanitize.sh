@@ -34,7 +34,7 @@ if [ "$preset" = tsan ]; then export ENDOTOWER_REPLAY_WATCHDOG_MS=${ENDOTOWER_RE
 # Under TSan the end-to-end runs of `endotower sim` that differ only in what the
 # single-threaded analysis and SCI decide are left out (ASan and the release suite run
 # them): each is one `endotower sim` with the same threads handing the same buffers over
-# (capture, analysis with the gesture segmenter's helper, output), costs 0.5-1.5 min
+# (capture, analysis with the gesture segmenter's helper, output), costs 20-96 s
 # under TSan, and TSan sees those threads in the ones kept: the scripted scenarios of the
 # button's ring menu and the scissors' activation, the bundled recording with its event
 # timeline, the replay and fault-injection tests, and the segmenter's helper-thread test.
