@@ -55,6 +55,19 @@ std::uint64_t fnv1a(std::span<const std::uint8_t> bytes) {
     return h;
 }
 
+// A shipped scenario (board/sim/scenarios/NAME.yaml) rendered at width x height.
+bool open_scene(const std::string& name, int width, int height, std::uint64_t seed,
+                scene::SceneRenderer& renderer, std::string& error) {
+    scene::Scenario scenario;
+    if (!scene::load_scenario(
+            std::string(ENDOTOWER_SOURCE_DIR) + "/board/sim/scenarios/" + name + ".yaml", scenario,
+            error))
+        return false;
+    scenario.width = width;
+    scenario.height = height;
+    return renderer.init(scenario, seed, error);
+}
+
 struct Suite {
     const char* scenario;
     int width, height, first, step, count;
@@ -79,14 +92,8 @@ TEST(GestureSegmenterGolden, SameMaskTipsAndFeaturesAsTheOpenCvImplementation) {
     const bool dump = std::getenv("ENDOTOWER_GOLDEN_DUMP") != nullptr;
     std::size_t row = 0;
     for (const Suite& s : kSuites) {
-        scene::Scenario scenario;
-        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + s.scenario + ".yaml",
-                                         scenario, error))
-            << error;
-        scenario.width = s.width;
-        scenario.height = s.height;
         scene::SceneRenderer renderer;
-        ASSERT_TRUE(renderer.init(scenario, 77, error)) << error;
+        ASSERT_TRUE(open_scene(s.scenario, s.width, s.height, 77, renderer, error)) << error;
         GestureSegmenterParams p;
         p.method = s.method;
         GestureSegmenter segmenter(&model, p);
@@ -170,14 +177,8 @@ TEST(GestureSegmenterGolden, NoHeapAllocationPerFrame) {
     GestureClassifier classifier;
     ASSERT_TRUE(model.load(root + "/board/sim/models/tool_likelihood.bin", error)) << error;
     ASSERT_TRUE(classifier.load(root + "/board/sim/models/gestures.yml", error)) << error;
-    scene::Scenario scenario;
-    ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/fig312_nonoverlapping.yaml",
-                                     scenario, error))
-        << error;
-    scenario.width = 1920;
-    scenario.height = 1080;
     scene::SceneRenderer renderer;
-    ASSERT_TRUE(renderer.init(scenario, 312, error)) << error;
+    ASSERT_TRUE(open_scene("fig312_nonoverlapping", 1920, 1080, 312, renderer, error)) << error;
     std::vector<scene::Image> images(2);
     scene::FrameTruth truth;
     renderer.render(0, images[0], truth);
@@ -233,14 +234,8 @@ TEST(GestureSegmenterThreads, TheHelperGivesWhatOneThreadGives) {
                           {"two_tools_crossing", 1920, 1080, 6, 20}};
     int compared = 0, crowded = 0;
     for (const Case& c : cases) {
-        scene::Scenario scenario;
-        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
-                                         scenario, error))
-            << error;
-        scenario.width = c.width;
-        scenario.height = c.height;
         scene::SceneRenderer renderer;
-        ASSERT_TRUE(renderer.init(scenario, 5, error)) << error;
+        ASSERT_TRUE(open_scene(c.scenario, c.width, c.height, 5, renderer, error)) << error;
         // One pair of segmenters per mask setting, fed the same rendered frame (rendering
         // a 1080p frame costs far more than segmenting it).
         constexpr int kSingleThresholds[] = {0, 190};
@@ -339,14 +334,8 @@ TEST(GestureSegmenterTwoMasks, OneToolIsReadOnTheSecondMaskCrossingsOnTheFirst) 
     constexpr int kSecond[] = {190, 255};
     const hal::FrameFormat fmt{1920, 1080, 1920 * 3, hal::PixelFormat::kBgr24};
     for (const Case& c : kCases) {
-        scene::Scenario scenario;
-        ASSERT_TRUE(scene::load_scenario(root + "/board/sim/scenarios/" + c.scenario + ".yaml",
-                                         scenario, error))
-            << error;
-        scenario.width = 1920;
-        scenario.height = 1080;
         scene::SceneRenderer renderer;
-        ASSERT_TRUE(renderer.init(scenario, 7, error)) << error;
+        ASSERT_TRUE(open_scene(c.scenario, 1920, 1080, 7, renderer, error)) << error;
         GestureSegmenterParams first;
         first.profile = true;
         first.threshold = 170;
@@ -363,7 +352,7 @@ TEST(GestureSegmenterTwoMasks, OneToolIsReadOnTheSecondMaskCrossingsOnTheFirst) 
         }
         scene::Image image;
         scene::FrameTruth truth;
-        for (int frame = 1; frame < scenario.frames; frame += c.step) {
+        for (int frame = 1; frame < renderer.frames(); frame += c.step) {
             renderer.render(frame, image, truth);
             hal::Frame f;
             f.format = fmt;
