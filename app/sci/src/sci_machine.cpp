@@ -188,9 +188,9 @@ void SciMachine::point(const SciFrame& f) {
         left_item_ = -1;
         confirm_start_ = f.t_ns;
         loop_sectors_ = 0;
-        loop_x_ = f.tool_count > 0 ? f.tools[0].x : 0;
-        loop_y_ = f.tool_count > 0 ? f.tools[0].y : 0;
         tip_count_ = tip_next_ = 0;  // the loop's path starts here
+        loop_x_ = loop_y_ = 0;
+        if (const auto tip = loop_tip(f)) loop_x_ = tip->x, loop_y_ = tip->y;
         remember_tip(f);
         event_ = "select";
         go(SciState::kConfirm);
@@ -199,26 +199,38 @@ void SciMachine::point(const SciFrame& f) {
     go(highlighted_ >= 0 ? SciState::kHighlight : SciState::kMenu);
 }
 
+// The loop is made by the jaws that selected: while a gesture is read, its region's
+// tip (the end of the open jaws, or where the held gesture was last seen). The tracked
+// tip of open jaws slides along the shaft by 40-60 px from frame to frame (a straight
+// stroke read so went in 5-7 directions: docs/sci.md, "The loop on the jaws' tip");
+// without a gesture, the tracked tip.
+std::optional<SciMachine::TipSample> SciMachine::loop_tip(const SciFrame& f) {
+    if (f.gesture != SciGesture::kNone) return TipSample{f.t_ns, f.gesture_x, f.gesture_y};
+    if (f.tool_count > 0) return TipSample{f.t_ns, f.tools[0].x, f.tools[0].y};
+    return std::nullopt;
+}
+
 void SciMachine::remember_tip(const SciFrame& f) {
-    if (f.tool_count == 0) return;
-    tips_[static_cast<std::size_t>(tip_next_)] = {f.t_ns, f.tools[0].x, f.tools[0].y};
+    const auto tip = loop_tip(f);
+    if (!tip) return;
+    tips_[static_cast<std::size_t>(tip_next_)] = *tip;
     tip_next_ = (tip_next_ + 1) % static_cast<int>(tips_.size());
     tip_count_ = std::min(tip_count_ + 1, static_cast<int>(tips_.size()));
 }
 
 void SciMachine::track_loop(const SciFrame& f) {
-    if (f.tool_count == 0) return;
+    if (!loop_tip(f)) return;
     remember_tip(f);
-    // The loop is read on the tip's mean over the last kTipSmoothingNs: the tracked tip
-    // of open jaws jumps back and forth along the shaft by more than the jitter floor,
-    // and each jump turns the heading by about 180 degrees, which summed can make a
-    // "loop" of a straight stroke. A loop takes about a second; 160 ms barely shrinks it.
-    constexpr hal::Nanos kTipSmoothingNs = 160'000'000;
+    // The loop is read on the tip's mean over the last `loop_mean_ms`: the jaws' tip
+    // jumps between the two jaws' ends, the tracked tip along the shaft, by more than the
+    // jitter floor, and each jump turns the heading by about 180 degrees. A loop takes
+    // about a second; 240 ms shrinks it little.
+    const hal::Nanos window = ms_to_ns(params_.loop_mean_ms);
     double sx = 0, sy = 0;
     int n = 0;
     for (int k = 0; k < tip_count_; ++k) {
         const TipSample& s = tips_[static_cast<std::size_t>(k)];
-        if (f.t_ns - s.t >= kTipSmoothingNs) continue;
+        if (f.t_ns - s.t >= window) continue;
         sx += s.x, sy += s.y, ++n;
     }
     const double x = sx / n, y = sy / n;

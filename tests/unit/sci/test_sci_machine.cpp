@@ -300,62 +300,6 @@ TEST(SciMachine, ATipJumpingBackAndForthIsNoLoop) {
     EXPECT_EQ(d.event(), "deny");
 }
 
-// Tracked tips of two rendered trials (toolchain/sci-gesture-commands.sh, 640x480, 25
-// fps), from the select on. Trial 7: a 5 mm grasper loops with open jaws from the 11th
-// frame; its tracked tip wanders 5-10 px about the true circle, so its heading turned
-// only 219 degrees, and the turning rule of 2026-11-27 (270) denied it; its steps go in
-// seven of the eight directions: confirm. Trial 41: a straight stroke, while the
-// tracked tip jumps 60 px to the other jaw and back for nine frames; the turning rule
-// read the jumps as a loop and executed the item; their steps go in too few directions.
-constexpr double kTrial7[][2] = {
-    {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3},
-    {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3}, {469.7, 245.3}, {477.9, 244.8},
-    {479.9, 250.6}, {483.0, 250.9}, {481.6, 256.6}, {481.5, 261.2}, {483.5, 263.2}, {488.0, 262.2},
-    {489.8, 263.9}, {493.8, 263.9}, {496.1, 266.1}, {492.6, 274.4}, {499.3, 266.5}, {497.8, 271.2},
-    {499.4, 269.8}, {502.5, 263.9}, {504.7, 261.9}, {507.4, 252.7}, {503.0, 259.0}, {502.3, 253.3},
-    {502.0, 251.4}, {499.3, 250.8}, {500.6, 244.4}, {498.6, 242.4}, {494.0, 243.4}, {492.2, 240.5},
-    {488.2, 240.5}, {482.3, 245.6}, {484.1, 240.7}, {477.2, 248.9}, {476.7, 248.9}, {479.0, 245.5},
-    {476.1, 248.7}};
-constexpr double kTrial41[][2] = {
-    {168.8, 226.0}, {168.8, 225.5}, {168.8, 226.5}, {168.6, 227.1}, {168.8, 225.5}, {168.8, 226.0},
-    {168.8, 226.0}, {168.8, 226.0}, {168.8, 226.0}, {168.8, 226.0}, {167.9, 228.0}, {166.8, 222.2},
-    {166.1, 222.4}, {165.5, 221.4}, {164.7, 211.8}, {163.7, 214.9}, {162.4, 217.2}, {161.8, 210.1},
-    {160.3, 210.7}, {160.5, 207.9}, {221.8, 227.6}, {221.8, 227.6}, {214.6, 222.2}, {218.6, 222.9},
-    {215.3, 218.3}, {214.6, 222.2}, {214.6, 222.2}, {217.9, 226.9}, {217.9, 226.9}, {156.2, 209.9},
-    {156.0, 213.6}, {156.6, 213.0}, {156.7, 209.8}, {157.0, 211.1}, {157.0, 213.8}, {156.5, 218.4},
-    {156.7, 219.5}, {156.2, 224.0}, {156.6, 225.3}, {156.7, 227.2}, {156.8, 226.2}, {156.6, 225.5},
-    {157.0, 225.6}, {156.7, 226.5}, {156.9, 225.9}, {156.7, 225.3}, {156.8, 226.7}, {156.7, 227.7},
-    {156.9, 226.4}, {156.8, 226.9}, {156.7, 227.7}};
-
-// Selects "3-D effects" with the tip at tips[0] (it left the item as the hold began),
-// then plays the rest a frame each 40 ms, then holds the last tip to the window's end.
-// Returns the event that ended the confirm window and the frame (from the select).
-template <std::size_t N>
-std::pair<std::string, int> replay_tracked(const double (&tips)[N][2]) {
-    Driver d;
-    d.press(0, kW / 2.0, kH / 2.0);
-    const auto [x, y] = d.at("3-D effects");
-    d.frame(40 * kMs, x, y);
-    d.frame(80 * kMs, tips[0][0], tips[0][1], SciGesture::kOpenGrasper, 0);
-    d.frame(1080 * kMs, tips[0][0], tips[0][1], SciGesture::kOpenGrasper, 1000, true);
-    EXPECT_EQ(d.event(), "select");
-    for (int k = 1; k <= 50; ++k) {
-        const auto& p = tips[std::min<std::size_t>(static_cast<std::size_t>(k), N - 1)];
-        d.frame(1080 * kMs + k * 40 * kMs, p[0], p[1]);
-        if (d.event() == "confirm" || d.event() == "deny") return {std::string(d.event()), k};
-    }
-    return {"", 50};
-}
-
-TEST(SciMachine, ATrackedLoopConfirmsAndATrackedStrokeDenies) {
-    const auto [loop_event, loop_frame] = replay_tracked(kTrial7);
-    EXPECT_EQ(loop_event, "confirm");
-    EXPECT_GT(loop_frame, 11);  // not before the loop began
-    const auto [stroke_event, stroke_frame] = replay_tracked(kTrial41);
-    EXPECT_EQ(stroke_event, "deny");
-    EXPECT_EQ(stroke_frame, 50);  // exactly 2.0 s after the select
-}
-
 // A deny, then the same item selected again: the second loop is read on its own path.
 TEST(SciMachine, AfterADenyASecondSelectAndLoopConfirms) {
     Driver d;

@@ -8,7 +8,7 @@
 // (the item under the tip or chosen by the wheel; the tip's item clicks after
 // `dwell_ms`), confirm (an item selected with the open grasper, the one under the tip
 // or the one the tip left during the grasper's hold or `select_grace_ms` before it,
-// waits `confirm_ms` for a loop of the tip's 160 ms mean: a loop confirms, anything
+// waits `confirm_ms` for a loop of the jaws' tip: a loop confirms, anything
 // else denies, fig. 3.32/3.33), grabbed (the image box follows the tool, eq. 4.33).
 // Inputs: button press = activate / click the highlighted item / place the box;
 // long press = deactivate; wheel = move the highlight (images in the viewer); a cross
@@ -23,13 +23,14 @@
 // formed by a grasp").
 // event() names what happened this frame (docs/sci.md lists them), or is empty.
 // Params defaults: layout three_level, dwell 2000 ms, activation hold 3000 ms, cross
-// hold 1000 ms, confirm window 2000 ms, select grace 200 ms, loop 6 of 8 directions,
+// hold 1000 ms, confirm window 2000 ms, select grace 200 ms, loop 5 of 8 directions,
 // activation area the bottom 20 % x middle 40 % of the frame. No allocation after
 // configure().
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string_view>
 
@@ -81,13 +82,14 @@ struct SciFrame {
 struct SciParams {
     SciLayout layout = SciLayout::kThreeLevel;
     double dwell_ms = 2000, activation_hold_ms = 3000, cross_hold_ms = 1000, confirm_ms = 2000;
-    // The loop, read on the tip's 160 ms mean in steps of at least `loop_step_fraction`
-    // of the height: it confirms once the steps have gone in `loop_sectors` of the eight
-    // 45-degree directions (one turn goes in all eight, a small or quick one in 6-8; a
-    // stroke and back in two, with the tracked tip's jitter 3-5; docs/sci.md, "Select
-    // and loop").
-    int loop_sectors = 6;
+    // The loop, read on the jaws' tip (the gesture's; the tracked tip without one),
+    // averaged over `loop_mean_ms`, in steps of at least `loop_step_fraction` of the
+    // height: it confirms once the steps have gone in `loop_sectors` of the eight
+    // 45-degree directions (one turn goes in 5-8, a stroke and back in 4 or fewer with the
+    // jaws' tip's jitter; docs/sci.md, "Select and loop", "The loop on the jaws' tip").
+    int loop_sectors = 5;
     double loop_step_fraction = 0.015;
+    double loop_mean_ms = 240;
     // An item the tip left this long before the open grasper's hold began is still the
     // one selected: the hold's start lags the jaws' opening by up to the gesture hold's
     // dropout tolerance (GestureHoldParams::dropout_ms, 200), while opening them moves
@@ -197,12 +199,13 @@ private:
     int confirm_item_ = -1;
     double loop_x_ = 0, loop_y_ = 0;
     std::uint8_t loop_sectors_ = 0;  // bit k: a step went in direction k x 45 degrees
-    // The cursor's recent tips: the loop is followed on their mean over kTipSmoothingNs.
+    // The loop's recent tips (loop_tip): it is followed on their mean over loop_mean_ms.
     struct TipSample {
         hal::Nanos t = 0;
         double x = 0, y = 0;
     };
-    std::array<TipSample, 16> tips_{};
+    static std::optional<TipSample> loop_tip(const SciFrame& f);
+    std::array<TipSample, 32> tips_{};  // 240 ms at up to 130 fps
     int tip_count_ = 0, tip_next_ = 0;
     // The item the tip last left and when: the open grasper's hold that began on it
     // selects it (opening the jaws moves the tracked tip back towards the head).
