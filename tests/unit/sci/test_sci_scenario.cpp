@@ -442,6 +442,37 @@ TEST(SciScenario, TheOpenGrasperAtThePointerSelectsBesideTissueReadAsATool) {
     fs::remove_all(dir);
 }
 
+// An open grasper the network calls at just under 0.5 (board/sim/scenarios/sci/
+// grasper_doubtful.yaml, the SCI's held-out deny trial 137): with one bar for every label
+// the frame had no gesture and the 2 s dwell clicked MRI. The open grasper commands
+// nothing on its own, so its bar is 0.4: MRI is selected and the stroke denies it exactly
+// 2.0 s later.
+TEST(SciScenario, AnOpenGrasperReadJustUnderHalfSelects) {
+    const fs::path dir = temp_dir("doubtful");
+    const std::string failed = replay_on_the_ring_after_the_button(dir, "grasper_doubtful.yaml");
+    ASSERT_TRUE(failed.empty()) << failed;
+    const std::vector<Step> every = read_steps(dir), events = events_of(every);
+    ASSERT_EQ(every.size(), 135u);
+    ASSERT_EQ(events.size(), 4u) << ::testing::PrintToString(events);
+    EXPECT_EQ(events[0], (Step{3, "menu", "main", "-", "activate_button"}));
+    EXPECT_EQ(events[1].event, "highlight");
+    EXPECT_EQ(events[1].highlighted, "MRI");
+    const int sel = events[2].frame;
+    EXPECT_EQ(events[2], (Step{sel, "confirm", "main", "MRI", "select"}));
+    EXPECT_GE(sel, 45);  // the jaws open from frame 22: held 1.0 s
+    EXPECT_LE(sel, 49);
+    EXPECT_EQ(events[3], (Step{sel + 50, "menu", "main", "-", "deny"}));
+    // The case is there: before the select the open grasper is called under 0.5.
+    const std::vector<nlohmann::json> regions = gesture_regions(dir);
+    int doubtful = 0;
+    for (int f = 22; f < sel; ++f)
+        for (const auto& t : regions[static_cast<std::size_t>(f)])
+            doubtful += t.at("read") == "open_grasper" && t.at("confidence").get<double>() >= 0.4 &&
+                        t.at("confidence").get<double>() < 0.5;
+    EXPECT_GE(doubtful, 15);
+    fs::remove_all(dir);
+}
+
 TEST(SciBoard, UnknownKeysAndLayoutsAreRefusedWithFileAndLine) {
     const fs::path dir = temp_dir("board");
     std::ofstream(dir / "a.yaml") << "board: t\nsci:\n  layout: ring\n  dwel_ms: 100\n";

@@ -7,11 +7,13 @@
 // that a region with a two-tool gesture holds both tools, so its gesture is the frame's
 // whatever another region shows (`crossing_is_the_frames`, default on: a glint patch at
 // the rim read as scissors beside a cross; docs/gestures.md).
-// A label below `min_confidence` (0.5) counts as none; so does a region whose tip
-// window no arm leaves (GestureBlob::arms 0: the window holds the whole region, so its
-// shape is not the jaws'; two tools at rest against each other read as a cross), and a
-// two-tool gesture (cross, triangle, double triangle) in a window only one arm leaves
-// (crossing jaws leave it as two shafts; one is a tool resting against the other).
+// A label below `min_confidence` (0.5; the open grasper's own bar
+// `open_grasper_min_confidence`, 0.4: it commands nothing on its own) counts as none; so
+// does a region whose tip window no arm leaves (GestureBlob::arms 0: the window holds the
+// whole region, so its shape is not the jaws'; two tools at rest against each other read
+// as a cross), and a two-tool gesture (cross, triangle, double triangle) in a window only
+// one arm leaves (crossing jaws leave it as two shafts; one is a tool resting against
+// the other).
 // Where a region enters twice and no arm leaves its window, the arms are counted on the
 // window of the thinner entry's shaft instead (`thin_window_arms`, default on: a 10 mm
 // grasper crossing a 5 mm tool near the scope; GestureBlob::thin_arms).
@@ -87,6 +89,10 @@ private:
 struct GestureStageParams {
     GestureHoldParams hold;
     double min_confidence = 0.5;
+    // The open grasper commands nothing on its own: it selects an item of a menu already
+    // open, and the selection executes only after a loop. A doubtful open grasper costs
+    // a select to deny; a doubtful scissors or cross could open the interface.
+    double open_grasper_min_confidence = 0.4;
     bool crossing_is_the_frames = true;  // a two-tool gesture outranks other regions
     bool thin_window_arms = true;        // no arm: count them in the thinner shaft's window
     double pointer_fraction = 0.1;       // two single-tool calls: the one at the pointer
