@@ -81,8 +81,9 @@ void GestureStage::process(app::AnalysisContext& ctx) {
         int arms = blobs_[i].arms;
         if (arms == 0 && blobs_[i].entries == 2 && params_.thin_window_arms)
             arms = blobs_[i].thin_arms;
-        const double bar =
-            results[i].label == 0 ? params_.open_grasper_min_confidence : params_.min_confidence;
+        const double bar = results[i].label == kOpenGrasperLabel
+                               ? params_.open_grasper_min_confidence
+                               : params_.min_confidence;
         if (results[i].confidence < bar || arms == 0 ||
             (two_tool_gesture(results[i].label) && arms < 2))
             results[i].label = -1;

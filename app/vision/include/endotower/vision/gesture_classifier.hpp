@@ -64,6 +64,7 @@ inline constexpr std::array<const char*, kGestureLabelCount> kGestureLabels = {
     "open_grasper", "closed_grasper", "open_scissors",  "closed_scissors",
     "cross",        "triangle",       "double_triangle"};
 int gesture_label_index(const std::string& label);  // -1 if not one of kGestureLabels
+constexpr int kOpenGrasperLabel = 0;                // kGestureLabels[0]
 // The first four labels are one tool's (open/closed grasper, open/closed scissors); cross,
 // triangle, double triangle are made with two.
 constexpr int kSingleToolLabels = 4;
