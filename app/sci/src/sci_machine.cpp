@@ -174,16 +174,30 @@ void SciMachine::point(const SciFrame& f) {
         }
     }
     // Open grasper held (the gesture fired): select, then wait for the loop (fig. 3.32).
-    // The item is the one under the tip, or the one the tip left while the grasper was
-    // held still: the hold began on it. Opening the jaws moves the tracked tip, and the
-    // hold dates from the first frame read as an open grasper, up to the gesture hold's
+    // The item is the one under the jaws' tip (the gesture's region): the tracked tip of
+    // open jaws can sit 40-60 px back along the shaft, on no item or on the next one
+    // (docs/sci.md, "The select on the jaws' tip"); a highlight the wheel chose stays.
+    // Else the one under the tip, or the one the tip left while the grasper was held
+    // still: the hold began on it. Opening the jaws moves the tracked tip, and the hold
+    // dates from the first frame read as an open grasper, up to the gesture hold's
     // dropout tolerance later: an item left within `select_grace_ms` before the hold
     // counts too.
+    const bool fired = f.gesture == SciGesture::kOpenGrasper && f.gesture_fired;
+    int jaws_item = -1;
+    for (std::size_t k = 0; fired && !rearm_ && !wheel_highlight_ && k < menu().count; ++k)
+        if (menu().near(k, static_cast<float>(f.gesture_x), static_cast<float>(f.gesture_y),
+                        margin)) {
+            jaws_item = static_cast<int>(k);
+            break;
+        }
     const bool left_in_hold =
         left_item_ >= 0 && !rearm_ &&
         f.t_ns - left_at_ <= ms_to_ns(f.gesture_held_ms + params_.select_grace_ms);
-    const int selected = highlighted_ >= 0 ? highlighted_ : left_in_hold ? left_item_ : -1;
-    if (selected >= 0 && f.gesture == SciGesture::kOpenGrasper && f.gesture_fired) {
+    const int selected = jaws_item >= 0      ? jaws_item
+                         : highlighted_ >= 0 ? highlighted_
+                         : left_in_hold      ? left_item_
+                                             : -1;
+    if (selected >= 0 && fired) {
         highlighted_ = confirm_item_ = selected;
         left_item_ = -1;
         confirm_start_ = f.t_ns;

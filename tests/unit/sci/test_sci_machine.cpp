@@ -38,6 +38,18 @@ struct Driver {
         f.events = events;
         m.step(f);
     }
+    // One frame with the tracked tip at (x, y) and the gesture's region tip (the jaws')
+    // at (jx, jy): the open grasper held `held_ms`, fired or not.
+    void jaws(hal::Nanos at, double x, double y, double jx, double jy, double held_ms, bool fired) {
+        SciFrame f;
+        t = at;
+        f.t_ns = at;
+        f.tools[0].x = x, f.tools[0].y = y;
+        f.tool_count = 1;
+        f.gesture = SciGesture::kOpenGrasper, f.gesture_held_ms = held_ms, f.gesture_fired = fired;
+        f.gesture_x = jx, f.gesture_y = jy;
+        m.step(f);
+    }
     void press(hal::Nanos at, double x, double y) {
         frame(at, x, y, SciGesture::kNone, 0, false,
               {{hal::ControlEvent::Kind::kButtonPress, 0, 0, 0}});
@@ -358,6 +370,47 @@ TEST(SciMachine, OpenGrasperDoesNotSelectAnItemLeftBeforeItsHold) {
     d.frame(1320 * kMs, x + 0.3 * kW, y, SciGesture::kOpenGrasper, 1000, true);
     EXPECT_EQ(d.event(), "");
     EXPECT_EQ(d.m.state(), SciState::kMenu);
+}
+
+// The open jaws' end is where the surgeon points; the tracked tip of open jaws can sit
+// 40-60 px back along the shaft, on no item (held-out trials 124, 140, 212: no select,
+// nothing happened) or on the next one (trial 250: the loop executed EXIT for CT). The
+// item under the jaws' tip at the fire is the one selected.
+TEST(SciMachine, OpenGrasperSelectsTheItemUnderItsJaws) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    const auto [ox, oy] = d.at("Patient record");
+    d.jaws(40 * kMs, ox, oy, x, y, 0, false);  // the tracked tip on the item before
+    EXPECT_EQ(d.lit(), "Patient record");
+    d.jaws(1040 * kMs, ox, oy, x, y, 1000, true);
+    EXPECT_EQ(d.event(), "select");
+    EXPECT_EQ(d.lit(), "3-D effects");
+    EXPECT_EQ(d.m.state(), SciState::kConfirm);
+}
+
+TEST(SciMachine, OpenGrasperSelectsUnderItsJawsWithTheCursorOnNoItem) {
+    Driver d;
+    d.press(0, 320, 240);
+    const auto [x, y] = d.at("3-D effects");
+    d.jaws(40 * kMs, 320, 240, x, y, 0, false);
+    EXPECT_EQ(d.lit(), "");
+    d.jaws(1040 * kMs, 320, 240, x, y, 1000, true);
+    EXPECT_EQ(d.event(), "select");
+    EXPECT_EQ(d.lit(), "3-D effects");
+}
+
+// But the wheel's highlight is the surgeon's choice: the jaws elsewhere do not change it.
+TEST(SciMachine, OpenGrasperSelectsTheWheelsHighlightWhereverItsJaws) {
+    Driver d;
+    d.press(0, 320, 240);
+    d.wheel(40 * kMs, +1);
+    ASSERT_EQ(d.lit(), "Preoperative images");
+    const auto [x, y] = d.at("3-D effects");
+    d.jaws(80 * kMs, 320, 240, x, y, 0, false);
+    d.jaws(1080 * kMs, 320, 240, x, y, 1000, true);
+    EXPECT_EQ(d.event(), "select");
+    EXPECT_EQ(d.lit(), "Preoperative images");
 }
 
 TEST(SciMachine, AnyOtherMotionDeniesAfterTwoSeconds) {

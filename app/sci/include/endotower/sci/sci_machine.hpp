@@ -6,10 +6,11 @@
 // States: inactive, activating (scissors held still in the activation area at the
 // bottom of the image, fig. 3.31), menu (pointing, nothing highlighted), highlight
 // (the item under the tip or chosen by the wheel; the tip's item clicks after
-// `dwell_ms`), confirm (an item selected with the open grasper, the one under the tip
-// or the one the tip left during the grasper's hold or `select_grace_ms` before it,
-// waits `confirm_ms` for a loop of the jaws' tip: a loop confirms, anything
-// else denies, fig. 3.32/3.33), grabbed (the image box follows the tool, eq. 4.33).
+// `dwell_ms`), confirm (an item selected with the open grasper, the one under its jaws'
+// tip, else the one under the tip or the one the tip left during the grasper's hold or
+// `select_grace_ms` before it, waits `confirm_ms` for a loop of the jaws' tip: a loop
+// confirms, anything else denies, fig. 3.32/3.33), grabbed (the image box follows the
+// tool, eq. 4.33).
 // Inputs: button press = activate / click the highlighted item / place the box;
 // long press = deactivate; wheel = move the highlight (images in the viewer); a cross
 // held `cross_hold_ms` opens the quadrant menu when inactive and deactivates otherwise.
