@@ -183,13 +183,10 @@ void SciMachine::point(const SciFrame& f) {
     // dropout tolerance later: an item left within `select_grace_ms` before the hold
     // counts too.
     const bool fired = f.gesture == SciGesture::kOpenGrasper && f.gesture_fired;
-    int jaws_item = -1;
-    for (std::size_t k = 0; fired && !rearm_ && !wheel_highlight_ && k < menu().count; ++k)
-        if (menu().near(k, static_cast<float>(f.gesture_x), static_cast<float>(f.gesture_y),
-                        margin)) {
-            jaws_item = static_cast<int>(k);
-            break;
-        }
+    const int jaws_item =
+        fired && !rearm_ && !wheel_highlight_
+            ? menu().hit(static_cast<float>(f.gesture_x), static_cast<float>(f.gesture_y), margin)
+            : -1;
     const bool left_in_hold =
         left_item_ >= 0 && !rearm_ &&
         f.t_ns - left_at_ <= ms_to_ns(f.gesture_held_ms + params_.select_grace_ms);
@@ -204,8 +201,10 @@ void SciMachine::point(const SciFrame& f) {
         loop_sectors_ = 0;
         tip_count_ = tip_next_ = 0;  // the loop's path starts here
         loop_x_ = loop_y_ = 0;
-        if (const auto tip = loop_tip(f)) loop_x_ = tip->x, loop_y_ = tip->y;
-        remember_tip(f);
+        if (const auto tip = loop_tip(f)) {
+            loop_x_ = tip->x, loop_y_ = tip->y;
+            remember_tip(*tip);
+        }
         event_ = "select";
         go(SciState::kConfirm);
         return;
@@ -224,17 +223,16 @@ std::optional<SciMachine::TipSample> SciMachine::loop_tip(const SciFrame& f) {
     return std::nullopt;
 }
 
-void SciMachine::remember_tip(const SciFrame& f) {
-    const auto tip = loop_tip(f);
-    if (!tip) return;
-    tips_[static_cast<std::size_t>(tip_next_)] = *tip;
+void SciMachine::remember_tip(const TipSample& tip) {
+    tips_[static_cast<std::size_t>(tip_next_)] = tip;
     tip_next_ = (tip_next_ + 1) % static_cast<int>(tips_.size());
     tip_count_ = std::min(tip_count_ + 1, static_cast<int>(tips_.size()));
 }
 
 void SciMachine::track_loop(const SciFrame& f) {
-    if (!loop_tip(f)) return;
-    remember_tip(f);
+    const auto tip = loop_tip(f);
+    if (!tip) return;
+    remember_tip(*tip);
     // The loop is read on the tip's mean over the last `loop_mean_ms`: the jaws' tip
     // jumps between the two jaws' ends, the tracked tip along the shaft, by more than the
     // jitter floor, and each jump turns the heading by about 180 degrees. A loop takes

@@ -122,9 +122,9 @@ bool SciMenu::near(std::size_t k, float x, float y, float m) const {
     return a < i.end_deg + grow;
 }
 
-int SciMenu::hit(float x, float y) const {
+int SciMenu::hit(float x, float y, float margin) const {
     for (std::size_t k = 0; k < count; ++k)
-        if (near(k, x, y, 0.0f)) return static_cast<int>(k);
+        if (near(k, x, y, margin)) return static_cast<int>(k);
     return -1;
 }
 

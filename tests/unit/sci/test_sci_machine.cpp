@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "endotower/sci/sci_machine.hpp"
@@ -19,6 +21,7 @@ struct Driver {
     SciMachine m;
     hal::Nanos t = 0;
     bool dropout = false;  // the next frames' gesture is held through a dropout
+    std::optional<std::pair<double, double>> jaws_at;  // the gesture's tip, if not the tool's
     explicit Driver(SciParams p = {}) : m(p) { m.configure(kW, kH); }
 
     // One frame at time `at` with the cursor at (x, y) (x < 0: no tool).
@@ -32,7 +35,7 @@ struct Driver {
             f.tool_count = 1;
         }
         f.gesture = g, f.gesture_held_ms = held_ms, f.gesture_fired = fired;
-        f.gesture_x = x, f.gesture_y = y;
+        f.gesture_x = jaws_at ? jaws_at->first : x, f.gesture_y = jaws_at ? jaws_at->second : y;
         f.gesture_dropout = dropout;
         for (auto& e : events) e.time_ns = at;
         f.events = events;
@@ -41,14 +44,9 @@ struct Driver {
     // One frame with the tracked tip at (x, y) and the gesture's region tip (the jaws')
     // at (jx, jy): the open grasper held `held_ms`, fired or not.
     void jaws(hal::Nanos at, double x, double y, double jx, double jy, double held_ms, bool fired) {
-        SciFrame f;
-        t = at;
-        f.t_ns = at;
-        f.tools[0].x = x, f.tools[0].y = y;
-        f.tool_count = 1;
-        f.gesture = SciGesture::kOpenGrasper, f.gesture_held_ms = held_ms, f.gesture_fired = fired;
-        f.gesture_x = jx, f.gesture_y = jy;
-        m.step(f);
+        jaws_at = {jx, jy};
+        frame(at, x, y, SciGesture::kOpenGrasper, held_ms, fired);
+        jaws_at.reset();
     }
     void press(hal::Nanos at, double x, double y) {
         frame(at, x, y, SciGesture::kNone, 0, false,

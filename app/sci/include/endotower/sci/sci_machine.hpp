@@ -151,7 +151,6 @@ private:
     void point(const SciFrame& f);
     void functions(const SciFrame& f);
     void track_loop(const SciFrame& f);
-    void remember_tip(const SciFrame& f);
     bool cross_held(const SciFrame& f);
     void remember_tools(const SciFrame& f);
     int sectors_travelled() const;  // of the eight, since the select
@@ -206,6 +205,7 @@ private:
         double x = 0, y = 0;
     };
     static std::optional<TipSample> loop_tip(const SciFrame& f);
+    void remember_tip(const TipSample& tip);
     std::array<TipSample, 32> tips_{};  // 240 ms at up to 130 fps
     int tip_count_ = 0, tip_next_ = 0;
     // The item the tip last left and when: the open grasper's hold that began on it

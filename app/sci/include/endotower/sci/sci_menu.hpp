@@ -76,8 +76,8 @@ struct SciMenu {
     MenuId id = MenuId::kMain;
     std::array<SciItem, kMaxItems> items{};
     std::size_t count = 0;
-    // The index of the item under (x, y), or -1.
-    int hit(float x, float y) const;
+    // The index of the first item under (x, y), each grown by `margin` px (near), or -1.
+    int hit(float x, float y, float margin = 0) const;
     // Whether (x, y) lies on item k grown by `margin` px on every side (a sector: radially,
     // and by that arc at the point's radius).
     bool near(std::size_t k, float x, float y, float margin) const;
